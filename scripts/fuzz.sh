@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets with clang into build-fuzz/ and runs each on its corpus under
+# tests/fuzz/<target>/ for a fixed time (FUZZ_SECONDS, default 60 for the parser). New inputs
+# go to a scratch folder, so the committed corpus only changes by hand.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+if ! command -v clang++ >/dev/null; then
+  echo "fuzz: clang++ not found, fuzz targets skipped"; exit 0
+fi
+CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DISOMESH_FUZZ=ON -DISOMESH_BUILD_BENCH=OFF >/dev/null
+targets=$(cd tests/fuzz && ls -d */ 2>/dev/null | tr -d / || true)
+for t in $targets; do
+  cmake --build build-fuzz -j "$(nproc)" --target "fuzz_$t"
+  seconds_var="FUZZ_SECONDS_${t^^}"
+  seconds=${!seconds_var:-${FUZZ_SECONDS:-60}}
+  scratch=$(mktemp -d)
+  echo "fuzz: $t for ${seconds}s"
+  ./build-fuzz/bin/"fuzz_$t" -max_total_time="$seconds" -print_final_stats=1 \
+    -artifact_prefix="build-fuzz/$t-" "$scratch" "tests/fuzz/$t" 2>&1 | tail -n 12
+  rm -rf "$scratch"
+done
