@@ -16,9 +16,9 @@
 //   edge is crossed when its two corners differ in that sense, and then exactly once.
 // - Triangles use vertex ids 0..11 (the vertex on that edge; the caller places it at the edge's
 //   crossing, by linear interpolation or root finding) and kInteriorVertex (12), a vertex inside
-//   the cell that some subcases (the tunnels and the large loops of MC33) need. Recommended
-//   position: the mean of the cell's crossing points on its crossed edges (what
-//   uniform_grid_mesher.h does); any point inside the cell near the surface keeps the topology.
+//   the cell that the subcases with a contour loop of 7 or more vertices (6.2, 7.3, 10.2, 12.2,
+//   12.3, 13.x...) fan around. Recommended position: the mean of the crossing points of the edges
+//   in CellTriangulation::interior_vertex_edges (what uniform_grid_mesher.h does).
 // - Orientation: each triangle is counter-clockwise seen from the outside (f > 0), so its
 //   geometric normal points towards increasing f.
 // - Watertightness: the face test depends only on the four values of the face, symmetrically, so
@@ -34,15 +34,27 @@ inline constexpr std::uint8_t kInteriorVertex = 12;
 
 /// kEdgeCorners[e] = {lower corner, upper corner} of edge e (see the conventions above).
 inline constexpr std::array<std::array<std::uint8_t, 2>, 12> kEdgeCorners{{
-    {0, 1}, {2, 3}, {4, 5}, {6, 7},  // along x
-    {0, 2}, {1, 3}, {4, 6}, {5, 7},  // along y
-    {0, 4}, {1, 5}, {2, 6}, {3, 7},  // along z
+    {0, 1},
+    {2, 3},
+    {4, 5},
+    {6, 7},  // along x
+    {0, 2},
+    {1, 3},
+    {4, 6},
+    {5, 7},  // along y
+    {0, 4},
+    {1, 5},
+    {2, 6},
+    {3, 7},  // along z
 }};
 
 struct CellTriangulation {
     std::uint8_t triangle_count = 0;
     /// triangles[0 .. triangle_count): vertex ids 0..11 (edges) or kInteriorVertex.
     std::array<std::array<std::uint8_t, 3>, 12> triangles{};
+    /// Bit e set for the edges of the contour loop that kInteriorVertex fans (0 when unused): the
+    /// recommended position of that vertex is the mean of these edges' crossing points.
+    std::uint16_t interior_vertex_edges = 0;
 
     bool uses_interior_vertex() const;
 };
@@ -53,5 +65,24 @@ std::uint8_t corner_configuration(const std::array<double, 8>& corner_values);
 /// Triangulation of the isosurface (value 0) of the trilinear interpolant of the cell, with the
 /// topology of that surface inside the cell. Precondition: every value is finite.
 CellTriangulation triangulate_cell(const std::array<double, 8>& corner_values);
+
+/// The face test (asymptotic decider): whether the inside corners of an ambiguous face are joined
+/// across it. a, b, c, d are the face's values in cyclic order; precondition: a and c are on one
+/// side of 0 and b and d on the other. Invariant under rotating and reversing the cycle, exactly,
+/// so neighbouring cells agree; a tie (saddle value exactly 0) joins the outside corners.
+bool face_joins_inside(double a, double b, double c, double d);
+
+/// The decisions behind triangulate_cell, for tests and diagnostics.
+struct CellDecision {
+    std::uint8_t config = 0;        ///< corner_configuration
+    std::uint8_t joined_faces = 0;  ///< bit f: face f (mc33_tables.h) joins its inside corners
+    /// The two contour loops (indices into mc33::cell_loops(config, joined_faces)) bounding a
+    /// tube through the cell, or -1, -1 when every loop bounds a disk.
+    std::array<std::int8_t, 2> tube{-1, -1};
+    /// Pairs of same-sign surface patches the interior test joined through the cell (1 for a
+    /// tube; more would be a configuration the trilinear interpolant cannot produce).
+    std::uint8_t interior_joins = 0;
+};
+CellDecision decide_cell(const std::array<double, 8>& corner_values);
 
 }  // namespace isomesh

@@ -1,0 +1,62 @@
+// Case tables of Marching Cubes 33 (see mc33.h for the cell conventions and the papers).
+//
+// Chernyaev's 33 configurations are generated here rather than typed in: for each sign
+// configuration of the 8 corners (256) and each outcome of the face tests of its ambiguous faces,
+// the isosurface's boundary on the cube (the contour loops drawn by the face segments) and the
+// sign regions ("patches") of the cube's surface are traced by a program at first use. The
+// trilinear interpolant's surface inside the cell is then a disk per loop, except that the interior
+// test may find two same-sign patches joined through the cell, in which case the two loops around
+// the patch between them bound a tube (the "tunnel" subcases 4.1.2, 6.1.2, 7.4.2, 10.1.2, 12.1.2,
+// 13.5.2 of Chernyaev). mc33_tables_test.cpp checks every entry and classifies them under the
+// cube's 48 symmetries and complementation into the paper's cases.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+namespace isomesh::mc33 {
+
+/// Faces: 0: x = 0, 1: x = 1, 2: y = 0, 3: y = 1, 4: z = 0, 5: z = 1. Corners counter-clockwise
+/// seen from inside the cell, so corners 0 and 2 (and 1 and 3) of a face are diagonal.
+inline constexpr std::array<std::array<std::uint8_t, 4>, 6> kFaceCorners{{
+    {0, 2, 6, 4},
+    {1, 5, 7, 3},
+    {0, 4, 5, 1},
+    {2, 3, 7, 6},
+    {0, 1, 3, 2},
+    {4, 6, 7, 5},
+}};
+
+/// The edge joining two corners of the cell that differ in exactly one coordinate.
+std::uint8_t edge_between(std::uint8_t corner_a, std::uint8_t corner_b);
+
+/// Bit f set when face f is ambiguous for this configuration (bit i = corner i inside): its
+/// diagonal corners have equal signs and its adjacent corners differ, so the face test decides.
+std::uint8_t ambiguous_faces(std::uint8_t config);
+
+inline constexpr int kMaxLoops = 4;
+
+/// The contour loops of a cell on the cube's surface, with the patches they separate.
+struct CellLoops {
+    std::uint8_t loop_count = 0;
+    /// Loop l is vertices[loop_begin[l] .. loop_begin[l + 1]) (edge ids), oriented so that the
+    /// inside (negative) patch is on its left seen from inside the cell; a fan over it in this
+    /// order is counter-clockwise seen from outside.
+    std::array<std::uint8_t, kMaxLoops + 1> loop_begin{};
+    std::array<std::uint8_t, 12> vertices{};
+    /// The patch (connected region of one sign on the cube's surface) of each corner, numbered
+    /// from 0 in order of first corner.
+    std::array<std::uint8_t, 8> corner_patch{};
+    std::uint8_t patch_count = 0;
+    /// loop_patches[l] = {inside patch, outside patch} on either side of loop l.
+    std::array<std::array<std::uint8_t, 2>, kMaxLoops> loop_patches{};
+
+    std::uint8_t loop_size(int l) const { return loop_begin[l + 1] - loop_begin[l]; }
+};
+
+/// The loops of configuration `config` when the inside corners are joined across exactly the
+/// faces in `joined_faces`. Precondition: joined_faces is a subset of ambiguous_faces(config).
+/// Thread-safe (the tables are built once, at first use).
+const CellLoops& cell_loops(std::uint8_t config, std::uint8_t joined_faces);
+
+}  // namespace isomesh::mc33
