@@ -1,0 +1,285 @@
+// Writing and validating binary frames (layout in frame.h; PROTOCOL.md, "Binary frames").
+#include "protocol/frame.h"
+
+#include <algorithm>
+#include <string>
+
+#include "protocol/varint.h"
+
+namespace isomesh::protocol {
+namespace {
+
+Error frame_error(std::string message) {
+    return Error{ErrorCode::bad_frame, std::move(message)};
+}
+Error field_error(std::string message) {
+    return Error{ErrorCode::bad_field, std::move(message)};
+}
+
+template <class T>
+void put(std::span<std::uint8_t> out, std::size_t offset, T value) {
+    for (std::size_t i = 0; i < sizeof(T); ++i) {
+        out[offset + i] = static_cast<std::uint8_t>(static_cast<std::uint64_t>(value) >> (8 * i));
+    }
+}
+
+template <class T>
+T get(std::span<const std::uint8_t> in, std::size_t offset) {
+    std::uint64_t value = 0;
+    for (std::size_t i = 0; i < sizeof(T); ++i) {
+        value |= static_cast<std::uint64_t>(in[offset + i]) << (8 * i);
+    }
+    return static_cast<T>(value);
+}
+
+/// Checks that `ids` are distinct and in range; returns them sorted.
+Result<std::vector<std::uint64_t>> sorted_distinct(std::span<const std::uint64_t> ids,
+                                                   const char* what) {
+    std::vector<std::uint64_t> sorted(ids.begin(), ids.end());
+    std::sort(sorted.begin(), sorted.end());
+    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
+        return field_error(std::string(what) + " ids repeat");
+    }
+    if (!sorted.empty() && sorted.back() > kMaxTriangleId) {
+        return field_error(std::string(what) + " id exceeds 2^53 - 1");
+    }
+    return sorted;
+}
+
+std::optional<Error> check_frame_count(std::size_t count, const char* what) {
+    if (count > kMaxFrameTriangles) {
+        return field_error(std::string("more than 2^24 ") + what + " triangles in one frame");
+    }
+    return std::nullopt;
+}
+
+FrameHeader header_for(const FrameInfo& info) {
+    FrameHeader header;
+    header.kind = info.kind;
+    header.flags = info.flags;
+    header.session = info.session;
+    header.sequence = info.sequence;
+    header.timestamp_us = info.timestamp_us;
+    header.function_version = info.function_version;
+    return header;
+}
+
+std::vector<std::uint8_t> assemble(FrameHeader header, const std::vector<std::uint8_t>& removed,
+                                   const std::vector<std::uint8_t>& triangle_ids,
+                                   const EncodedMesh& mesh) {
+    header.removed_bytes = static_cast<std::uint32_t>(removed.size());
+    header.triangle_ids_bytes = static_cast<std::uint32_t>(triangle_ids.size());
+    header.mesh_bytes = static_cast<std::uint32_t>(mesh.bytes.size());
+    header.point_count = mesh.point_count;
+    std::vector<std::uint8_t> frame(kFrameHeaderBytes);
+    write_frame_header(header, std::span<std::uint8_t, kFrameHeaderBytes>(frame));
+    frame.insert(frame.end(), removed.begin(), removed.end());
+    frame.insert(frame.end(), triangle_ids.begin(), triangle_ids.end());
+    frame.insert(frame.end(), mesh.bytes.begin(), mesh.bytes.end());
+    return frame;
+}
+
+Result<EncodedMesh> encode_if_any(std::span<const Vertex> vertices,
+                                  std::span<const Triangle> triangles,
+                                  const MeshEncoding& encoding) {
+    if (triangles.empty()) return EncodedMesh{};
+    return encode_mesh(vertices, triangles, encoding);
+}
+
+/// The section of `frame` at `offset` of `length` bytes (bounds checked by the caller).
+std::span<const std::uint8_t> section(std::span<const std::uint8_t> frame, std::size_t& offset,
+                                      std::uint32_t length) {
+    auto bytes = frame.subspan(offset, length);
+    offset += length;
+    return bytes;
+}
+
+Result<std::vector<std::uint64_t>> decode_triangle_ids(const FrameHeader& header,
+                                                       std::span<const std::uint8_t> bytes) {
+    if (header.triangle_ids_bytes == 0) {
+        std::vector<std::uint64_t> ids(header.triangle_count);
+        for (std::uint32_t i = 0; i < header.triangle_count; ++i) {
+            ids[i] = header.base_triangle_id + i;
+        }
+        return ids;
+    }
+    auto ids =
+        decode_id_sequence(bytes, header.triangle_count, header.base_triangle_id, kMaxTriangleId);
+    if (!ids) return ids.error();
+    if (!sorted_distinct(ids.value(), "triangle")) return frame_error("triangle ids repeat");
+    return ids;
+}
+
+}  // namespace
+
+void write_frame_header(const FrameHeader& h, std::span<std::uint8_t, kFrameHeaderBytes> out) {
+    std::copy(kFrameMagic.begin(), kFrameMagic.end(), out.begin());
+    out[4] = static_cast<std::uint8_t>(kProtocolVersion);
+    out[5] = static_cast<std::uint8_t>(h.kind);
+    put(out, 6, h.flags);
+    std::copy(h.session.bytes.begin(), h.session.bytes.end(), out.begin() + 8);
+    put(out, 24, h.sequence);
+    put(out, 32, h.timestamp_us);
+    put(out, 40, h.base_triangle_id);
+    put(out, 48, h.function_version);
+    put(out, 52, h.removed_count);
+    put(out, 56, h.triangle_count);
+    put(out, 60, h.point_count);
+    put(out, 64, h.removed_bytes);
+    put(out, 68, h.triangle_ids_bytes);
+    put(out, 72, h.mesh_bytes);
+}
+
+Result<FrameHeader> read_frame_header(std::span<const std::uint8_t> in) {
+    if (in.size() < kFrameHeaderBytes) return frame_error("frame shorter than its 76-byte header");
+    if (!std::equal(kFrameMagic.begin(), kFrameMagic.end(), in.begin())) {
+        return frame_error("frame does not start with ISOM");
+    }
+    if (in[4] != kProtocolVersion) {
+        return Error{ErrorCode::unsupported_version,
+                     "frame of protocol version " + std::to_string(in[4])};
+    }
+    if (in[5] != static_cast<std::uint8_t>(FrameKind::keyframe) &&
+        in[5] != static_cast<std::uint8_t>(FrameKind::delta)) {
+        return frame_error("unknown frame kind " + std::to_string(in[5]));
+    }
+    FrameHeader h;
+    h.kind = static_cast<FrameKind>(in[5]);
+    h.flags = get<std::uint16_t>(in, 6);
+    std::copy_n(in.begin() + 8, 16, h.session.bytes.begin());
+    h.sequence = get<std::uint64_t>(in, 24);
+    h.timestamp_us = get<std::uint64_t>(in, 32);
+    h.base_triangle_id = get<std::uint64_t>(in, 40);
+    h.function_version = get<std::uint32_t>(in, 48);
+    h.removed_count = get<std::uint32_t>(in, 52);
+    h.triangle_count = get<std::uint32_t>(in, 56);
+    h.point_count = get<std::uint32_t>(in, 60);
+    h.removed_bytes = get<std::uint32_t>(in, 64);
+    h.triangle_ids_bytes = get<std::uint32_t>(in, 68);
+    h.mesh_bytes = get<std::uint32_t>(in, 72);
+
+    if (h.function_version == 0) return frame_error("function version 0");
+    if (h.removed_count > kMaxFrameTriangles || h.triangle_count > kMaxFrameTriangles) {
+        return frame_error("more than 2^24 triangles in one frame");
+    }
+    if (h.kind == FrameKind::keyframe && h.removed_count > 0) {
+        return frame_error("a keyframe removes nothing");
+    }
+    if ((h.triangle_count == 0) != (h.mesh_bytes == 0)) {
+        return frame_error("mesh payload length disagrees with the triangle count");
+    }
+    if ((h.triangle_count == 0) != (h.point_count == 0) ||
+        h.point_count > std::uint64_t{3} * h.triangle_count) {
+        return frame_error("point count disagrees with the triangle count");
+    }
+    if (h.base_triangle_id > kMaxTriangleId ||
+        (h.triangle_ids_bytes == 0 && h.triangle_count > 0 &&
+         h.triangle_count - 1 > kMaxTriangleId - h.base_triangle_id)) {
+        return frame_error("triangle ids exceed 2^53 - 1");
+    }
+    return h;
+}
+
+Result<EncodedFrame> encode_delta(const FrameInfo& info, std::span<const std::uint64_t> removed,
+                                  std::span<const Vertex> vertices,
+                                  std::span<const Triangle> triangles,
+                                  std::uint64_t base_triangle_id, const MeshEncoding& encoding) {
+    assert(info.kind == FrameKind::delta);
+    if (auto error = check_frame_count(removed.size(), "removed")) return *error;
+    if (auto error = check_frame_count(triangles.size(), "added")) return *error;
+    if (!triangles.empty() && (base_triangle_id > kMaxTriangleId ||
+                               triangles.size() - 1 > kMaxTriangleId - base_triangle_id)) {
+        return field_error("added triangle ids would exceed 2^53 - 1");
+    }
+    auto sorted_removed = sorted_distinct(removed, "removed");
+    if (!sorted_removed) return sorted_removed.error();
+    auto mesh = encode_if_any(vertices, triangles, encoding);
+    if (!mesh) return mesh.error();
+
+    FrameHeader header = header_for(info);
+    header.base_triangle_id = base_triangle_id;
+    header.removed_count = static_cast<std::uint32_t>(removed.size());
+    header.triangle_count = static_cast<std::uint32_t>(triangles.size());
+    EncodedFrame out;
+    out.bytes = assemble(header, encode_sorted_ids(sorted_removed.value()), {}, mesh.value());
+    out.triangle_ids.resize(triangles.size());
+    for (std::size_t i = 0; i < triangles.size(); ++i) {
+        out.triangle_ids[i] = base_triangle_id + mesh.value().decoded_index[i];
+    }
+    return out;
+}
+
+Result<EncodedFrame> encode_keyframe(const FrameInfo& info, std::span<const Vertex> vertices,
+                                     std::span<const Triangle> triangles,
+                                     std::span<const std::uint64_t> triangle_ids,
+                                     const MeshEncoding& encoding) {
+    assert(info.kind == FrameKind::keyframe);
+    if (auto error = check_frame_count(triangles.size(), "added")) return *error;
+    if (triangle_ids.size() != triangles.size()) {
+        return field_error("a keyframe needs one id per triangle");
+    }
+    if (auto valid = sorted_distinct(triangle_ids, "triangle"); !valid) return valid.error();
+    auto mesh = encode_if_any(vertices, triangles, encoding);
+    if (!mesh) return mesh.error();
+
+    std::vector<std::uint64_t> ids_in_decoded_order(triangles.size());
+    for (std::size_t i = 0; i < triangles.size(); ++i) {
+        ids_in_decoded_order[mesh.value().decoded_index[i]] = triangle_ids[i];
+    }
+    FrameHeader header = header_for(info);
+    header.triangle_count = static_cast<std::uint32_t>(triangles.size());
+    const bool consecutive =
+        std::adjacent_find(ids_in_decoded_order.begin(), ids_in_decoded_order.end(),
+                           [](std::uint64_t a, std::uint64_t b) { return b != a + 1; }) ==
+        ids_in_decoded_order.end();
+    std::vector<std::uint8_t> explicit_ids;
+    if (consecutive && !triangles.empty()) {
+        header.base_triangle_id = ids_in_decoded_order.front();
+    } else {
+        explicit_ids = encode_id_sequence(ids_in_decoded_order, 0);
+    }
+    EncodedFrame out;
+    out.bytes = assemble(header, {}, explicit_ids, mesh.value());
+    out.triangle_ids.assign(triangle_ids.begin(), triangle_ids.end());
+    return out;
+}
+
+Result<DecodedFrame> decode_frame(std::span<const std::uint8_t> frame) {
+    auto header = read_frame_header(frame);
+    if (!header) return header.error();
+    const FrameHeader& h = header.value();
+    const std::uint64_t expected =
+        std::uint64_t{kFrameHeaderBytes} + h.removed_bytes + h.triangle_ids_bytes + h.mesh_bytes;
+    if (expected != frame.size()) {
+        return frame_error("frame of " + std::to_string(frame.size()) + " bytes, header says " +
+                           std::to_string(expected));
+    }
+    std::size_t offset = kFrameHeaderBytes;
+    const auto removed_section = section(frame, offset, h.removed_bytes);
+    const auto ids_section = section(frame, offset, h.triangle_ids_bytes);
+    const auto mesh_section = section(frame, offset, h.mesh_bytes);
+
+    DecodedFrame out;
+    out.header = h;
+    auto removed = decode_sorted_ids(removed_section, h.removed_count, kMaxTriangleId);
+    if (!removed) return removed.error();
+    out.removed = std::move(removed.value());
+    auto ids = decode_triangle_ids(h, ids_section);
+    if (!ids) return ids.error();
+    if (h.triangle_count == 0) return out;
+
+    auto mesh = decode_mesh(mesh_section);
+    if (!mesh) return mesh.error();
+    if (mesh.value().triangles.size() != h.triangle_count ||
+        mesh.value().point_count != h.point_count) {
+        return frame_error("mesh payload counts disagree with the header");
+    }
+    out.vertices = std::move(mesh.value().vertices);
+    out.triangles.reserve(h.triangle_count);
+    for (std::size_t i = 0; i < h.triangle_count; ++i) {
+        out.triangles.push_back({ids.value()[i], mesh.value().triangles[i].vertices});
+    }
+    return out;
+}
+
+}  // namespace isomesh::protocol

@@ -1,0 +1,123 @@
+// Binary frames: the mesh data of the isomesh protocol (PROTOCOL.md, "Binary frames").
+//
+// A frame is a fixed 76-byte little-endian header, then three sections whose lengths the header
+// gives: removed triangle ids (sorted, delta-coded varints), explicit triangle ids (optional,
+// zigzag delta-coded varints), and the mesh payload of added triangles (Draco, mesh_codec.h).
+//
+//   offset size field
+//        0    4 magic "ISOM"
+//        4    1 protocol version (1)
+//        5    1 kind: 1 keyframe, 2 delta
+//        6    2 flags (bit 0 converged, bit 1 catch_up; other bits 0, ignored by readers)
+//        8   16 session id
+//       24    8 sequence number
+//       32    8 server timestamp, microseconds since the Unix epoch
+//       40    8 base triangle id
+//       48    4 function version
+//       52    4 removed triangle count
+//       56    4 added triangle count
+//       60    4 mesh payload point count
+//       64    4 removed ids length in bytes
+//       68    4 explicit triangle ids length in bytes (0: ids are base + decoded index)
+//       72    4 mesh payload length in bytes
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "protocol/errors.h"
+#include "protocol/mesh_codec.h"
+#include "protocol/messages.h"
+
+namespace isomesh::protocol {
+
+inline constexpr std::size_t kFrameHeaderBytes = 76;
+inline constexpr std::array<std::uint8_t, 4> kFrameMagic = {'I', 'S', 'O', 'M'};
+/// Triangle ids stay below 2^53 so that JavaScript clients can hold them in Numbers.
+inline constexpr std::uint64_t kMaxTriangleId = (std::uint64_t{1} << 53) - 1;
+/// Most triangles (added or removed) in one frame.
+inline constexpr std::uint32_t kMaxFrameTriangles = 1u << 24;
+
+enum class FrameKind : std::uint8_t { keyframe = 1, delta = 2 };
+
+namespace frame_flags {
+/// After this frame the session's mesh meets its constraints for this function version.
+inline constexpr std::uint16_t converged = 1 << 0;
+/// A keyframe sent in place of deltas this connection missed (resync or backpressure).
+inline constexpr std::uint16_t catch_up = 1 << 1;
+}  // namespace frame_flags
+
+struct FrameHeader {
+    FrameKind kind = FrameKind::delta;
+    std::uint16_t flags = 0;
+    SessionId session;
+    std::uint64_t sequence = 0;
+    std::uint64_t timestamp_us = 0;
+    std::uint64_t base_triangle_id = 0;
+    std::uint32_t function_version = 1;
+    std::uint32_t removed_count = 0;
+    std::uint32_t triangle_count = 0;
+    std::uint32_t point_count = 0;
+    std::uint32_t removed_bytes = 0;
+    std::uint32_t triangle_ids_bytes = 0;
+    std::uint32_t mesh_bytes = 0;
+    friend bool operator==(const FrameHeader&, const FrameHeader&) = default;
+};
+
+void write_frame_header(const FrameHeader& header, std::span<std::uint8_t, kFrameHeaderBytes> out);
+
+/// Reads and validates a header: magic, version, kind, count limits, a keyframe removing nothing,
+/// the implicit id range base + count staying <= kMaxTriangleId, and mesh_bytes = 0 exactly when
+/// triangle_count = 0. Section lengths are checked against the frame by decode_frame.
+Result<FrameHeader> read_frame_header(std::span<const std::uint8_t> frame);
+
+/// What the server knows about a frame besides its triangles.
+struct FrameInfo {
+    FrameKind kind = FrameKind::delta;
+    std::uint16_t flags = 0;
+    SessionId session;
+    std::uint64_t sequence = 0;
+    std::uint64_t timestamp_us = 0;
+    std::uint32_t function_version = 1;
+};
+
+struct EncodedFrame {
+    std::vector<std::uint8_t> bytes;
+    /// The wire id given to each input triangle (deltas: base + its decoded index).
+    std::vector<std::uint64_t> triangle_ids;
+};
+
+/// A delta: `removed` (any order, distinct, each <= kMaxTriangleId) then `triangles` added, which
+/// get the ids base_triangle_id + decoded index. Preconditions: info.kind == delta and
+/// base_triangle_id + triangles.size() - 1 <= kMaxTriangleId. Fails (bad_field) on invalid input.
+Result<EncodedFrame> encode_delta(const FrameInfo& info, std::span<const std::uint64_t> removed,
+                                  std::span<const Vertex> vertices,
+                                  std::span<const Triangle> triangles,
+                                  std::uint64_t base_triangle_id, const MeshEncoding& encoding);
+
+/// A keyframe: the whole mesh, each triangle keeping its id (`triangle_ids[i]` for triangles[i],
+/// distinct, each <= kMaxTriangleId). Precondition: info.kind == keyframe.
+Result<EncodedFrame> encode_keyframe(const FrameInfo& info, std::span<const Vertex> vertices,
+                                     std::span<const Triangle> triangles,
+                                     std::span<const std::uint64_t> triangle_ids,
+                                     const MeshEncoding& encoding);
+
+struct FrameTriangle {
+    std::uint64_t id = 0;
+    std::array<std::uint32_t, 3> vertices{};  ///< global vertex ids
+    friend bool operator==(const FrameTriangle&, const FrameTriangle&) = default;
+};
+
+struct DecodedFrame {
+    FrameHeader header;
+    std::vector<std::uint64_t> removed;    ///< ascending
+    std::vector<Vertex> vertices;          ///< distinct global ids
+    std::vector<FrameTriangle> triangles;  ///< in decoded order, with their wire ids
+};
+
+/// Decodes and validates a whole frame; fails with bad_frame (or unsupported_version) on any
+/// inconsistency: lengths, counts, id ranges and duplicates, the mesh payload.
+Result<DecodedFrame> decode_frame(std::span<const std::uint8_t> frame);
+
+}  // namespace isomesh::protocol

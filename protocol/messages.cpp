@@ -1,0 +1,781 @@
+// Parsing and serializing control messages (PROTOCOL.md, "Control messages").
+//
+// Parsing is total: nlohmann-json's exceptions stay inside this file, every field is checked for
+// presence, type and range, and the first problem found becomes the returned error. Nesting depth
+// is checked on the raw text before parsing so that no input can make the parser recurse deeply.
+#include "protocol/messages.h"
+
+#include <cmath>
+#include <set>
+#include <utility>
+
+#include <nlohmann/json.hpp>
+
+namespace isomesh::protocol {
+namespace {
+
+using json = nlohmann::json;
+using ordered_json = nlohmann::ordered_json;
+
+constexpr std::array<std::string_view, kErrorCodeCount> kErrorCodeNames = {
+    "bad_json",         "unsupported_version", "unknown_type", "bad_field",
+    "unknown_session",  "bad_expression",      "too_large",    "too_many_sessions",
+    "budget_too_large", "eval_timeout",        "unavailable",  "internal",
+    "bad_frame",
+};
+
+constexpr std::array<std::string_view, 18> kMessageTypeNames = {
+    "create", "update", "subscribe", "unsubscribe", "pause",   "resume",
+    "close",  "resync", "ping",      "created",     "updated", "subscribed",
+    "ack",    "pong",   "progress",  "converged",   "error",   "closed",
+};
+
+constexpr std::array<std::string_view, 4> kCloseReasonNames = {"closed", "expired", "shutdown",
+                                                               "error"};
+
+template <class Enum, std::size_t N>
+std::optional<Enum> enum_from_name(const std::array<std::string_view, N>& names,
+                                   std::string_view name) {
+    for (std::size_t i = 0; i < N; ++i) {
+        if (names[i] == name) return static_cast<Enum>(i);
+    }
+    return std::nullopt;
+}
+
+/// True when no array or object in `text` nests deeper than `max_depth`. Brackets inside strings
+/// do not count. Malformed text passes here and fails in the parser.
+bool nesting_within(std::string_view text, int max_depth) {
+    int depth = 0;
+    bool in_string = false;
+    bool escaped = false;
+    for (char c : text) {
+        if (in_string) {
+            if (escaped) {
+                escaped = false;
+            } else if (c == '\\') {
+                escaped = true;
+            } else if (c == '"') {
+                in_string = false;
+            }
+        } else if (c == '"') {
+            in_string = true;
+        } else if (c == '[' || c == '{') {
+            if (++depth > max_depth) return false;
+        } else if (c == ']' || c == '}') {
+            --depth;
+        }
+    }
+    return true;
+}
+
+/// Reads the fields of one JSON object, remembering the first error and every key looked up, so
+/// that the keys never looked up can be reported as unknown.
+class FieldReader {
+  public:
+    FieldReader(const json& object, std::string prefix)
+        : object_(object), prefix_(std::move(prefix)) {}
+
+    bool ok() const { return !error_; }
+    const std::optional<Error>& error() const { return error_; }
+    void adopt(const std::optional<Error>& error) {
+        if (error && !error_) error_ = error;
+    }
+
+    void fail(ErrorCode code, std::string message) {
+        if (!error_) error_ = Error{code, std::move(message)};
+    }
+    void fail_field(std::string_view key, std::string_view problem) {
+        fail(ErrorCode::bad_field, "field " + path(key) + " " + std::string(problem));
+    }
+    std::string path(std::string_view key) const { return prefix_ + std::string(key); }
+
+    const json* find(std::string_view key) {
+        looked_up_.insert(std::string(key));
+        if (!ok()) return nullptr;
+        auto it = object_.find(key);
+        return it == object_.end() ? nullptr : &*it;
+    }
+    const json* require(std::string_view key) {
+        const json* value = find(key);
+        if (!value && ok()) fail(ErrorCode::bad_field, "missing field " + path(key));
+        return value;
+    }
+
+    std::optional<std::string> string(std::string_view key, bool required, std::size_t max_bytes,
+                                      ErrorCode too_long = ErrorCode::bad_field) {
+        const json* value = required ? require(key) : find(key);
+        if (!value) return std::nullopt;
+        if (!value->is_string()) {
+            fail_field(key, "must be a string");
+            return std::nullopt;
+        }
+        const auto& text = value->get_ref<const std::string&>();
+        if (text.size() > max_bytes) {
+            fail(too_long,
+                 "field " + path(key) + " is longer than " + std::to_string(max_bytes) + " bytes");
+            return std::nullopt;
+        }
+        return text;
+    }
+
+    std::optional<std::uint64_t> unsigned_integer(std::string_view key, bool required,
+                                                  std::uint64_t min, std::uint64_t max) {
+        const json* value = required ? require(key) : find(key);
+        if (!value) return std::nullopt;
+        if (!value->is_number_integer()) {
+            fail_field(key, "must be an integer");
+            return std::nullopt;
+        }
+        if (value->is_number_unsigned()) {
+            const auto n = value->get<std::uint64_t>();
+            if (n >= min && n <= max) return n;
+        }
+        fail_field(key, "must be between " + std::to_string(min) + " and " + std::to_string(max));
+        return std::nullopt;
+    }
+
+    std::optional<double> number(std::string_view key, bool required, double min) {
+        const json* value = required ? require(key) : find(key);
+        if (!value) return std::nullopt;
+        if (!value->is_number()) {
+            fail_field(key, "must be a number");
+            return std::nullopt;
+        }
+        const double x = value->get<double>();
+        if (!std::isfinite(x) || x < min) {
+            fail_field(key, std::isfinite(min) ? "must be a finite number >= " + format_number(min)
+                                               : std::string("must be a finite number"));
+            return std::nullopt;
+        }
+        return x;
+    }
+
+    /// A nested object's reader, or nothing (with an error) when the field is not an object.
+    std::optional<FieldReader> object(std::string_view key, bool required) {
+        const json* value = required ? require(key) : find(key);
+        if (!value) return std::nullopt;
+        if (!value->is_object()) {
+            fail_field(key, "must be an object");
+            return std::nullopt;
+        }
+        return FieldReader(*value, path(key) + ".");
+    }
+
+    void reject_unknown_fields() {
+        if (!ok()) return;
+        for (const auto& [key, value] : object_.items()) {
+            if (!looked_up_.contains(key)) {
+                fail(ErrorCode::bad_field, "unknown field " + path(key));
+                return;
+            }
+        }
+    }
+
+    const json& raw() const { return object_; }
+
+  private:
+    static std::string format_number(double x) { return json(x).dump(); }
+
+    const json& object_;
+    std::string prefix_;
+    std::set<std::string, std::less<>> looked_up_;
+    std::optional<Error> error_;
+};
+
+// ---- readers of the shared field types -----------------------------------------------------
+
+std::optional<RequestId> read_request_id(FieldReader& in) {
+    const json* value = in.find("id");
+    if (!value) return std::nullopt;
+    if (value->is_string()) {
+        const auto& text = value->get_ref<const std::string&>();
+        if (text.size() <= kMaxRequestIdBytes) return RequestId(text);
+    } else if (value->is_number_unsigned()) {
+        const auto n = value->get<std::uint64_t>();
+        if (n <= kMaxSafeInteger) return RequestId(static_cast<std::int64_t>(n));
+    } else if (value->is_number_integer()) {
+        const auto n = value->get<std::int64_t>();
+        if (n >= -static_cast<std::int64_t>(kMaxSafeInteger)) return RequestId(n);
+    }
+    in.fail_field("id", "must be an integer with |id| < 2^53 or a string of at most " +
+                            std::to_string(kMaxRequestIdBytes) + " bytes");
+    return std::nullopt;
+}
+
+std::optional<SessionId> read_session(FieldReader& in, bool required = true) {
+    const auto hex = in.string("session", required, 64);
+    if (!hex) return std::nullopt;
+    auto id = SessionId::from_hex(*hex);
+    if (!id) in.fail_field("session", "must be 32 hex digits");
+    return id;
+}
+
+std::optional<Box> read_box(FieldReader& in, bool required) {
+    const json* value = required ? in.require("box") : in.find("box");
+    if (!value) return std::nullopt;
+    if (!value->is_array() || value->size() != 6) {
+        in.fail_field("box", "must be an array of 6 numbers [x0, x1, y0, y1, z0, z1]");
+        return std::nullopt;
+    }
+    Box box{};
+    for (std::size_t i = 0; i < 6; ++i) {
+        const json& x = (*value)[i];
+        if (!x.is_number() || !std::isfinite(x.get<double>())) {
+            in.fail_field("box", "must hold finite numbers");
+            return std::nullopt;
+        }
+        box[i] = x.get<double>();
+    }
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+        if (!(box[2 * axis] < box[2 * axis + 1])) {
+            in.fail_field("box", "must have x0 < x1, y0 < y1 and z0 < z1");
+            return std::nullopt;
+        }
+    }
+    return box;
+}
+
+std::optional<Parameters> read_parameters(FieldReader& in, bool required,
+                                          const ParseLimits& limits) {
+    auto object = in.object("parameters", required);
+    if (!object) return std::nullopt;
+    const json& values = object->raw();
+    if (values.size() > limits.max_parameters) {
+        in.fail(ErrorCode::too_large,
+                "more than " + std::to_string(limits.max_parameters) + " parameters");
+        return std::nullopt;
+    }
+    Parameters parameters;
+    for (const auto& [name, value] : values.items()) {
+        if (name.empty() || name.size() > kMaxParameterNameBytes) {
+            in.fail_field("parameters", "names must have 1 to " +
+                                            std::to_string(kMaxParameterNameBytes) + " bytes");
+            return std::nullopt;
+        }
+        const auto x = object->number(name, true, -HUGE_VAL);
+        in.adopt(object->error());
+        if (!x) return std::nullopt;
+        parameters[name] = *x;
+    }
+    return parameters;
+}
+
+bool valid_error_measure(std::string_view name) {
+    if (name.empty()) return false;
+    for (char c : name) {
+        if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_')) return false;
+    }
+    return true;
+}
+
+/// Reads a constraints object; `complete` requires all three fields (replies).
+std::optional<Constraints> read_constraints(FieldReader& in, bool required, bool complete,
+                                            bool strict) {
+    auto object = in.object("constraints", required);
+    if (!object) return std::nullopt;
+    Constraints c;
+    c.triangles = object->unsigned_integer("triangles", complete, 1, kMaxSafeInteger);
+    c.max_error = object->number("max_error", complete, 0.0);
+    c.error_measure = object->string("error_measure", complete, kMaxErrorMeasureBytes);
+    if (c.error_measure && !valid_error_measure(*c.error_measure)) {
+        object->fail_field("error_measure", "must be a name of lowercase letters, digits and _");
+    }
+    if (strict) object->reject_unknown_fields();
+    in.adopt(object->error());
+    if (!in.ok()) return std::nullopt;
+    return c;
+}
+
+/// Reads "expression" or "vm": exactly one of them when `required`, at most one otherwise.
+std::optional<Source> read_source(FieldReader& in, bool required, const ParseLimits& limits) {
+    auto expression =
+        in.string("expression", false, limits.max_expression_bytes, ErrorCode::too_large);
+    auto vm = in.string("vm", false, limits.max_vm_bytes, ErrorCode::too_large);
+    if (!in.ok()) return std::nullopt;
+    if (expression && vm) {
+        in.fail(ErrorCode::bad_field, "fields expression and vm are exclusive");
+        return std::nullopt;
+    }
+    if (expression) return Source{Source::Kind::expression, std::move(*expression)};
+    if (vm) return Source{Source::Kind::vm, std::move(*vm)};
+    if (required) in.fail(ErrorCode::bad_field, "missing field expression (or vm)");
+    return std::nullopt;
+}
+
+std::uint32_t read_version(FieldReader& in, bool required) {
+    return static_cast<std::uint32_t>(
+        in.unsigned_integer("version", required, 1, UINT32_MAX).value_or(1));
+}
+
+std::uint64_t read_count(FieldReader& in, std::string_view key) {
+    return in.unsigned_integer(key, true, 0, kMaxSafeInteger).value_or(0);
+}
+
+double read_double(FieldReader& in, std::string_view key) {
+    return in.number(key, true, 0.0).value_or(0.0);
+}
+
+// ---- client messages ------------------------------------------------------------------------
+
+ClientMessage read_create(FieldReader& in, std::optional<RequestId> id, const ParseLimits& limits) {
+    Create m;
+    m.id = std::move(id);
+    m.source = read_source(in, true, limits).value_or(Source{});
+    m.parameters = read_parameters(in, false, limits).value_or(Parameters{});
+    m.box = read_box(in, true).value_or(Box{});
+    m.constraints = read_constraints(in, false, false, true).value_or(Constraints{});
+    return m;
+}
+
+ClientMessage read_update(FieldReader& in, std::optional<RequestId> id, const ParseLimits& limits) {
+    Update m;
+    m.id = std::move(id);
+    m.session = read_session(in).value_or(SessionId{});
+    m.source = read_source(in, false, limits);
+    m.parameters = read_parameters(in, false, limits);
+    m.box = read_box(in, false);
+    m.constraints = read_constraints(in, false, false, true);
+    if (in.ok() && !m.source && !m.parameters && !m.box && !m.constraints) {
+        in.fail(ErrorCode::bad_field,
+                "update needs at least one of expression, vm, parameters, box, constraints");
+    }
+    return m;
+}
+
+template <class Request>
+ClientMessage read_session_request(FieldReader& in, std::optional<RequestId> id) {
+    Request m;
+    m.id = std::move(id);
+    m.session = read_session(in).value_or(SessionId{});
+    return m;
+}
+
+ClientMessage read_client_body(MessageType type, FieldReader& in, std::optional<RequestId> id,
+                               const ParseLimits& limits) {
+    switch (type) {
+        case MessageType::create:
+            return read_create(in, std::move(id), limits);
+        case MessageType::update:
+            return read_update(in, std::move(id), limits);
+        case MessageType::subscribe:
+            return read_session_request<Subscribe>(in, std::move(id));
+        case MessageType::unsubscribe:
+            return read_session_request<Unsubscribe>(in, std::move(id));
+        case MessageType::pause:
+            return read_session_request<Pause>(in, std::move(id));
+        case MessageType::resume:
+            return read_session_request<Resume>(in, std::move(id));
+        case MessageType::close:
+            return read_session_request<Close>(in, std::move(id));
+        case MessageType::resync:
+            return read_session_request<Resync>(in, std::move(id));
+        default:
+            return Ping{std::move(id)};
+    }
+}
+
+bool is_client_type(MessageType type) {
+    return type <= MessageType::ping;
+}
+
+// ---- server messages ------------------------------------------------------------------------
+
+SessionState read_state(FieldReader& in, const ParseLimits& limits) {
+    SessionState s;
+    s.version = read_version(in, true);
+    s.expression = in.string("expression", false, limits.max_expression_bytes);
+    s.parameters = read_parameters(in, true, limits).value_or(Parameters{});
+    s.box = read_box(in, true).value_or(Box{});
+    s.constraints = read_constraints(in, true, true, false).value_or(Constraints{});
+    return s;
+}
+
+template <class Reply>
+ServerMessage read_state_reply(FieldReader& in, std::optional<RequestId> id,
+                               const ParseLimits& limits) {
+    Reply m;
+    m.id = std::move(id);
+    m.session = read_session(in).value_or(SessionId{});
+    m.state = read_state(in, limits);
+    return m;
+}
+
+ServerMessage read_ack(FieldReader& in, std::optional<RequestId> id) {
+    Ack m;
+    m.id = std::move(id);
+    const auto request = in.string("request", true, 32);
+    const auto type = request ? message_type_from_string(*request) : std::nullopt;
+    const bool acknowledged =
+        type && *type >= MessageType::unsubscribe && *type <= MessageType::resync;
+    if (acknowledged) {
+        m.request = *type;
+    } else if (request) {
+        in.fail_field("request", "must be one of unsubscribe, pause, resume, close, resync");
+    }
+    m.session = read_session(in).value_or(SessionId{});
+    return m;
+}
+
+ServerMessage read_progress(FieldReader& in) {
+    Progress m;
+    m.session = read_session(in).value_or(SessionId{});
+    m.version = read_version(in, true);
+    m.sequence = read_count(in, "sequence");
+    m.triangles = read_count(in, "triangles");
+    m.error_max = read_double(in, "error_max");
+    m.error_total = read_double(in, "error_total");
+    m.splits_per_second = read_double(in, "splits_per_second");
+    return m;
+}
+
+ServerMessage read_converged(FieldReader& in) {
+    Converged m;
+    m.session = read_session(in).value_or(SessionId{});
+    m.version = read_version(in, true);
+    m.sequence = read_count(in, "sequence");
+    m.triangles = read_count(in, "triangles");
+    m.error_max = read_double(in, "error_max");
+    m.error_total = read_double(in, "error_total");
+    m.splits = read_count(in, "splits");
+    m.merges = read_count(in, "merges");
+    m.first_mesh_ms = read_double(in, "first_mesh_ms");
+    m.total_ms = read_double(in, "total_ms");
+    return m;
+}
+
+ServerMessage read_error(FieldReader& in, std::optional<RequestId> id) {
+    ErrorReply m;
+    m.id = std::move(id);
+    m.session = read_session(in, false);
+    const auto code = in.string("code", true, 64);
+    if (code) {
+        const auto parsed = error_code_from_string(*code);
+        // A newer server may use codes this client does not know: they read as `internal`.
+        m.code = parsed.value_or(ErrorCode::internal);
+    }
+    m.message = in.string("message", true, 1 << 16).value_or("");
+    const auto column = in.unsigned_integer("column", false, 1, UINT32_MAX);
+    if (column) m.column = static_cast<std::uint32_t>(*column);
+    return m;
+}
+
+ServerMessage read_closed(FieldReader& in) {
+    Closed m;
+    m.session = read_session(in).value_or(SessionId{});
+    const auto reason = in.string("reason", true, 32);
+    if (!reason) return m;
+    const auto parsed = enum_from_name<Closed::Reason>(kCloseReasonNames, *reason);
+    if (parsed) {
+        m.reason = *parsed;
+    } else {
+        in.fail_field("reason", "must be one of closed, expired, shutdown, error");
+    }
+    return m;
+}
+
+ServerMessage read_server_body(MessageType type, FieldReader& in, std::optional<RequestId> id,
+                               const ParseLimits& limits) {
+    switch (type) {
+        case MessageType::created:
+            return read_state_reply<Created>(in, std::move(id), limits);
+        case MessageType::updated:
+            return read_state_reply<Updated>(in, std::move(id), limits);
+        case MessageType::subscribed:
+            return read_state_reply<Subscribed>(in, std::move(id), limits);
+        case MessageType::ack:
+            return read_ack(in, std::move(id));
+        case MessageType::pong:
+            return Pong{std::move(id),
+                        in.unsigned_integer("time_us", true, 0, kMaxSafeInteger).value_or(0)};
+        case MessageType::progress:
+            return read_progress(in);
+        case MessageType::converged:
+            return read_converged(in);
+        case MessageType::error:
+            return read_error(in, std::move(id));
+        default:
+            return read_closed(in);
+    }
+}
+
+// ---- the envelope shared by both directions -------------------------------------------------
+
+/// The parsed JSON document and what its envelope ("v", "type", "id") says.
+struct Envelope {
+    json document;
+    std::optional<MessageType> type;
+    std::optional<RequestId> id;
+    std::optional<Error> error;
+};
+
+Envelope read_envelope(std::string_view text, const ParseLimits& limits, bool from_client) {
+    Envelope e;
+    if (text.size() > limits.max_message_bytes) {
+        e.error = Error{ErrorCode::too_large, "message of " + std::to_string(text.size()) +
+                                                  " bytes exceeds the limit of " +
+                                                  std::to_string(limits.max_message_bytes)};
+        return e;
+    }
+    if (!nesting_within(text, limits.max_depth)) {
+        e.error = Error{ErrorCode::bad_json,
+                        "JSON nested deeper than " + std::to_string(limits.max_depth) + " levels"};
+        return e;
+    }
+    try {
+        e.document = json::parse(text);
+    } catch (const json::parse_error& failure) {
+        e.error =
+            Error{ErrorCode::bad_json, "invalid JSON at byte " + std::to_string(failure.byte)};
+        return e;
+    }
+    if (!e.document.is_object()) {
+        e.error = Error{ErrorCode::bad_json, "a message must be a JSON object"};
+        return e;
+    }
+    FieldReader in(e.document, "");
+    e.id = read_request_id(in);
+    const auto version = in.unsigned_integer("v", true, 0, UINT64_MAX);
+    if (version && *version != static_cast<std::uint64_t>(kProtocolVersion)) {
+        in.fail(ErrorCode::unsupported_version, "protocol version " + std::to_string(*version) +
+                                                    " is not supported (this peer speaks " +
+                                                    std::to_string(kProtocolVersion) + ")");
+    }
+    const auto type_name = in.string("type", true, 32, ErrorCode::unknown_type);
+    if (type_name) {
+        e.type = message_type_from_string(*type_name);
+        if (!e.type || is_client_type(*e.type) != from_client) {
+            e.type.reset();
+            in.fail(ErrorCode::unknown_type, "unknown message type \"" + *type_name + "\"");
+        }
+    }
+    e.error = in.error();
+    return e;
+}
+
+// ---- writers --------------------------------------------------------------------------------
+
+ordered_json id_json(const RequestId& id) {
+    return std::visit([](const auto& value) { return ordered_json(value); }, id);
+}
+
+ordered_json envelope(MessageType type, const std::optional<RequestId>& id) {
+    ordered_json out = ordered_json::object();
+    out["v"] = kProtocolVersion;
+    out["type"] = to_string(type);
+    if (id) out["id"] = id_json(*id);
+    return out;
+}
+
+ordered_json box_json(const Box& box) {
+    return ordered_json(box);
+}
+
+ordered_json parameters_json(const Parameters& parameters) {
+    ordered_json out = ordered_json::object();
+    for (const auto& [name, value] : parameters) out[name] = value;
+    return out;
+}
+
+ordered_json constraints_json(const Constraints& c) {
+    ordered_json out = ordered_json::object();
+    if (c.triangles) out["triangles"] = *c.triangles;
+    if (c.max_error) out["max_error"] = *c.max_error;
+    if (c.error_measure) out["error_measure"] = *c.error_measure;
+    return out;
+}
+
+void write_source(ordered_json& out, const Source& source) {
+    out[source.kind == Source::Kind::vm ? "vm" : "expression"] = source.text;
+}
+
+ordered_json write(const Create& m) {
+    ordered_json out = envelope(MessageType::create, m.id);
+    write_source(out, m.source);
+    if (!m.parameters.empty()) out["parameters"] = parameters_json(m.parameters);
+    out["box"] = box_json(m.box);
+    const auto constraints = constraints_json(m.constraints);
+    if (!constraints.empty()) out["constraints"] = constraints;
+    return out;
+}
+
+ordered_json write(const Update& m) {
+    ordered_json out = envelope(MessageType::update, m.id);
+    out["session"] = m.session.to_hex();
+    if (m.source) write_source(out, *m.source);
+    if (m.parameters) out["parameters"] = parameters_json(*m.parameters);
+    if (m.box) out["box"] = box_json(*m.box);
+    if (m.constraints) out["constraints"] = constraints_json(*m.constraints);
+    return out;
+}
+
+template <MessageType T>
+ordered_json write(const SessionRequest<T>& m) {
+    ordered_json out = envelope(T, m.id);
+    out["session"] = m.session.to_hex();
+    return out;
+}
+
+ordered_json write(const Ping& m) {
+    return envelope(MessageType::ping, m.id);
+}
+
+template <MessageType T>
+ordered_json write(const StateReply<T>& m) {
+    ordered_json out = envelope(T, m.id);
+    out["session"] = m.session.to_hex();
+    out["version"] = m.state.version;
+    if (m.state.expression) out["expression"] = *m.state.expression;
+    out["parameters"] = parameters_json(m.state.parameters);
+    out["box"] = box_json(m.state.box);
+    out["constraints"] = constraints_json(m.state.constraints);
+    return out;
+}
+
+ordered_json write(const Ack& m) {
+    ordered_json out = envelope(MessageType::ack, m.id);
+    out["request"] = to_string(m.request);
+    out["session"] = m.session.to_hex();
+    return out;
+}
+
+ordered_json write(const Pong& m) {
+    ordered_json out = envelope(MessageType::pong, m.id);
+    out["time_us"] = m.time_us;
+    return out;
+}
+
+ordered_json write(const Progress& m) {
+    ordered_json out = envelope(MessageType::progress, std::nullopt);
+    out["session"] = m.session.to_hex();
+    out["version"] = m.version;
+    out["sequence"] = m.sequence;
+    out["triangles"] = m.triangles;
+    out["error_max"] = m.error_max;
+    out["error_total"] = m.error_total;
+    out["splits_per_second"] = m.splits_per_second;
+    return out;
+}
+
+ordered_json write(const Converged& m) {
+    ordered_json out = envelope(MessageType::converged, std::nullopt);
+    out["session"] = m.session.to_hex();
+    out["version"] = m.version;
+    out["sequence"] = m.sequence;
+    out["triangles"] = m.triangles;
+    out["error_max"] = m.error_max;
+    out["error_total"] = m.error_total;
+    out["splits"] = m.splits;
+    out["merges"] = m.merges;
+    out["first_mesh_ms"] = m.first_mesh_ms;
+    out["total_ms"] = m.total_ms;
+    return out;
+}
+
+ordered_json write(const ErrorReply& m) {
+    ordered_json out = envelope(MessageType::error, m.id);
+    if (m.session) out["session"] = m.session->to_hex();
+    out["code"] = to_string(m.code);
+    out["message"] = m.message;
+    if (m.column) out["column"] = *m.column;
+    return out;
+}
+
+ordered_json write(const Closed& m) {
+    ordered_json out = envelope(MessageType::closed, std::nullopt);
+    out["session"] = m.session.to_hex();
+    out["reason"] = kCloseReasonNames[static_cast<std::size_t>(m.reason)];
+    return out;
+}
+
+std::string dump(const ordered_json& out) {
+    // Strings came from valid JSON or from the server itself; `replace` keeps dump() from throwing
+    // on invalid UTF-8 should a server-made message ever contain some.
+    return out.dump(-1, ' ', false, ordered_json::error_handler_t::replace);
+}
+
+}  // namespace
+
+std::string_view to_string(ErrorCode code) {
+    return kErrorCodeNames[static_cast<std::size_t>(code)];
+}
+
+std::optional<ErrorCode> error_code_from_string(std::string_view name) {
+    return enum_from_name<ErrorCode>(kErrorCodeNames, name);
+}
+
+std::string_view to_string(MessageType type) {
+    return kMessageTypeNames[static_cast<std::size_t>(type)];
+}
+
+std::optional<MessageType> message_type_from_string(std::string_view name) {
+    return enum_from_name<MessageType>(kMessageTypeNames, name);
+}
+
+std::string SessionId::to_hex() const {
+    static constexpr char kDigits[] = "0123456789abcdef";
+    std::string hex(32, '0');
+    for (std::size_t i = 0; i < bytes.size(); ++i) {
+        hex[2 * i] = kDigits[bytes[i] >> 4];
+        hex[2 * i + 1] = kDigits[bytes[i] & 15];
+    }
+    return hex;
+}
+
+std::optional<SessionId> SessionId::from_hex(std::string_view hex) {
+    if (hex.size() != 32) return std::nullopt;
+    auto digit = [](char c) -> int {
+        if (c >= '0' && c <= '9') return c - '0';
+        if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+        if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+        return -1;
+    };
+    SessionId id;
+    for (std::size_t i = 0; i < id.bytes.size(); ++i) {
+        const int high = digit(hex[2 * i]);
+        const int low = digit(hex[2 * i + 1]);
+        if (high < 0 || low < 0) return std::nullopt;
+        id.bytes[i] = static_cast<std::uint8_t>(high * 16 + low);
+    }
+    return id;
+}
+
+Result<ClientMessage, RequestError> parse_client_message(std::string_view text,
+                                                         const ParseLimits& limits) {
+    Envelope e = read_envelope(text, limits, true);
+    if (e.error) return RequestError{*e.error, e.id};
+    FieldReader in(e.document, "");
+    read_request_id(in);  // marks the envelope's keys as known
+    in.find("v");
+    in.find("type");
+    ClientMessage message = read_client_body(*e.type, in, e.id, limits);
+    in.reject_unknown_fields();
+    if (!in.ok()) return RequestError{*in.error(), e.id};
+    return message;
+}
+
+Result<ServerMessage> parse_server_message(std::string_view text, const ParseLimits& limits) {
+    Envelope e = read_envelope(text, limits, false);
+    if (e.error) return *e.error;
+    FieldReader in(e.document, "");
+    ServerMessage message = read_server_body(*e.type, in, e.id, limits);
+    if (!in.ok()) return *in.error();
+    return message;
+}
+
+std::string serialize(const ClientMessage& message) {
+    return dump(std::visit([](const auto& m) { return write(m); }, message));
+}
+
+std::string serialize(const ServerMessage& message) {
+    return dump(std::visit([](const auto& m) { return write(m); }, message));
+}
+
+ErrorReply to_reply(const RequestError& rejected) {
+    ErrorReply reply;
+    reply.id = rejected.id;
+    reply.code = rejected.error.code;
+    reply.message = rejected.error.message;
+    return reply;
+}
+
+}  // namespace isomesh::protocol
