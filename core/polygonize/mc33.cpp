@@ -19,8 +19,9 @@
 #include "polygonize/mc33.h"
 
 #include <algorithm>
+#include <bit>
 #include <cassert>
-#include <cstdlib>
+#include <limits>
 
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
@@ -126,55 +127,152 @@ class TriangleWriter {
     CellTriangulation& out_;
 };
 
-/// A disk over a loop: a fan from its first vertex, or around the interior vertex for loops of
-/// 7 or more vertices (their fans from a boundary vertex fold over the saddles they wind around).
-void triangulate_disk(const std::uint8_t* loop, int n, CellTriangulation& out) {
-    TriangleWriter writer(out);
-    if (n >= 7) {
-        for (int i = 0; i < n; ++i) {
-            writer.add(loop[i], loop[(i + 1) % n], kInteriorVertex);
-            out.interior_vertex_edges |= static_cast<std::uint16_t>(1u << loop[i]);
-        }
-        return;
-    }
-    for (int i = 1; i + 1 < n; ++i) writer.add(loop[0], loop[i], loop[i + 1]);
-}
+/// A tube between loops A and B is a strip: a cyclic sequence of triangles, each advancing one
+/// step along A (forwards) or along B (backwards: the loops' orientations as the tube's two
+/// boundaries), joined by rungs (a_i, b_j). A rung may not repeat (that would pinch the tube) and
+/// should not be a chord (mc33::Chords). When no strip avoids chords, a contiguous block of the
+/// strip runs through the interior vertex c instead: rungs a_i - c - b_j, entered by the triangle
+/// (b_j, a_i, c) and left by (c, a_i, b_j). When that fails too, chords of the faces the cell owns
+/// are allowed, and last (the tube of 7.4.2 or its complement hugging the three faces of a corner
+/// that the cell does not own) any chord: the neighbour across the face then draws the same chord
+/// only if it is itself a tube cell using a chord of that face, which the suites never produce.
+struct Strip {
+    int start_a = 0;  ///< the first rung is (a_start_a, b_start_b)
+    int start_b = 0;
+    unsigned moves = 0;    ///< bit k: step k advances along A (else along B)
+    int block_begin = -1;  ///< steps [block_begin, block_end] run through c; -1: no block
+    int block_end = -1;
+};
 
-/// A tube between loops A and B: a strip walking A forwards and B backwards (their orientations
-/// as boundaries of the tube) from the closest pair of vertices, closing the shorter rung of the
-/// two allowed ones. The progress along A and along B (as fractions of a turn) stay within half a
-/// turn of each other, so no vertex is joined to a whole loop (that would make a rung repeat and
-/// pinch the tube); with loops of 3 or more vertices a move is always allowed.
+class TubeStrips {
+  public:
+    TubeStrips(const std::uint8_t* a, int m, const std::uint8_t* b, int n,
+               const std::array<double, 8>& f)
+        : a_(a), b_(b), m_(m), n_(n) {
+        glm::dvec3 sum(0.0);
+        for (int i = 0; i < m; ++i) sum += pa_[i] = crossing(f, a[i]);
+        for (int j = 0; j < n; ++j) sum += pb_[j] = crossing(f, b[j]);
+        centre_ = sum / static_cast<double>(m + n);
+    }
+
+    /// The strip of least total rung length, without c if any exists.
+    Strip best() const {
+        Strip best_strip;
+        double best_cost = kInvalid;
+        // From the most to the least preferred (see Strip).
+        using mc33::Chords;
+        constexpr std::pair<bool, Chords> kTiers[] = {{false, Chords::kNone},
+                                                      {true, Chords::kNone},
+                                                      {false, Chords::kOwned},
+                                                      {true, Chords::kOwned},
+                                                      {false, Chords::kAny}};
+        for (const auto& [with_centre, chords] : kTiers) {
+            for (int ij = 0; ij < m_ * n_; ++ij) {
+                for (unsigned moves = 0; moves < (1u << (m_ + n_)); ++moves) {
+                    if (std::popcount(moves) != m_) continue;
+                    const int steps = m_ + n_;
+                    for (int begin = with_centre ? 0 : -1; begin < (with_centre ? steps : 0);
+                         ++begin) {
+                        for (int end = with_centre ? begin : -1; end < (with_centre ? steps : 0);
+                             ++end) {
+                            const Strip strip{ij / n_, ij % n_, moves, begin, end};
+                            const double c = cost(strip, chords);
+                            if (c < best_cost) {
+                                best_cost = c;
+                                best_strip = strip;
+                            }
+                        }
+                    }
+                }
+            }
+            if (best_cost < kInvalid) return best_strip;
+        }
+        assert(false && "no tube strip");
+        return best_strip;
+    }
+
+    void emit(const Strip& strip, CellTriangulation& out) const {
+        TriangleWriter writer(out);
+        int i = strip.start_a, j = strip.start_b;
+        for (int step = 0; step < m_ + n_; ++step) {
+            const bool in_block = strip.block_begin <= step && step <= strip.block_end;
+            if (step == strip.block_begin) writer.add(b_[j], a_[i], kInteriorVertex);
+            const std::uint8_t other_b = in_block ? kInteriorVertex : b_[j];
+            const std::uint8_t other_a = in_block ? kInteriorVertex : a_[i];
+            if ((strip.moves >> step) & 1u) {
+                const int i1 = (i + 1) % m_;
+                writer.add(a_[i], a_[i1], other_b);
+                i = i1;
+            } else {
+                const int j1 = (j + n_ - 1) % n_;
+                writer.add(b_[j1], b_[j], other_a);
+                j = j1;
+            }
+            if (step == strip.block_end) writer.add(kInteriorVertex, a_[i], b_[j]);
+        }
+    }
+
+    /// Bit e set for the edges of both loops (c sits at the mean of their crossings).
+    std::uint16_t edges() const {
+        std::uint16_t mask = 0;
+        for (int i = 0; i < m_; ++i) mask |= static_cast<std::uint16_t>(1u << a_[i]);
+        for (int j = 0; j < n_; ++j) mask |= static_cast<std::uint16_t>(1u << b_[j]);
+        return mask;
+    }
+
+  private:
+    static constexpr double kInvalid = std::numeric_limits<double>::infinity();
+
+    /// Summed rung lengths (c estimated at the loops' centre), or kInvalid.
+    double cost(const Strip& strip, mc33::Chords chords) const {
+        const auto may_join = [chords](std::uint8_t a, std::uint8_t b) {
+            return mc33::may_join(a, b, chords);
+        };
+        const int steps = m_ + n_;
+        if (strip.block_begin >= 0) {
+            int along_a = 0;
+            for (int step = strip.block_begin; step <= strip.block_end; ++step) {
+                along_a += (strip.moves >> step) & 1u;
+            }
+            const int along_b = strip.block_end - strip.block_begin + 1 - along_a;
+            if (along_a >= m_ || along_b >= n_) return kInvalid;  // c would repeat a vertex
+        }
+        int i = strip.start_a, j = strip.start_b;
+        if (!may_join(a_[i], b_[j])) return kInvalid;
+        std::array<std::uint16_t, 12> seen{};  // seen[i] bit j: rung (a_i, b_j) used
+        seen[i] = static_cast<std::uint16_t>(1u << j);
+        double total = glm::distance(pa_[i], pb_[j]);
+        for (int step = 0; step + 1 < steps; ++step) {  // the last step closes on the first rung
+            if ((strip.moves >> step) & 1u) {
+                i = (i + 1) % m_;
+            } else {
+                j = (j + n_ - 1) % n_;
+            }
+            if (strip.block_begin <= step && step < strip.block_end) {
+                total += glm::distance(pa_[i], centre_) + glm::distance(pb_[j], centre_);
+                continue;
+            }
+            if (!may_join(a_[i], b_[j]) || ((seen[i] >> j) & 1u)) return kInvalid;
+            seen[i] |= static_cast<std::uint16_t>(1u << j);
+            total += glm::distance(pa_[i], pb_[j]);
+        }
+        return total;
+    }
+
+    const std::uint8_t* a_;
+    const std::uint8_t* b_;
+    int m_, n_;
+    std::array<glm::dvec3, 12> pa_, pb_;
+    glm::dvec3 centre_;
+};
+
+/// Triangulates the tube between loops A and B (see Strip).
 void triangulate_tube(const std::uint8_t* a, int m, const std::uint8_t* b, int n,
                       const std::array<double, 8>& f, CellTriangulation& out) {
-    std::array<glm::dvec3, 12> pa, pb;
-    for (int i = 0; i < m; ++i) pa[i] = crossing(f, a[i]);
-    for (int j = 0; j < n; ++j) pb[j] = crossing(f, b[j]);
-    int j0 = 0;
-    for (int j = 1; j < n; ++j) {
-        if (glm::distance(pa[0], pb[j]) < glm::distance(pa[0], pb[j0])) j0 = j;
-    }
-    // Balanced iff |moves_a / m - moves_b / n| < 1/2, in units of 1 / (m n).
-    const auto balanced = [m, n](int moves_a, int moves_b) {
-        return 2 * std::abs(moves_a * n - moves_b * m) < m * n;
-    };
-    TriangleWriter writer(out);
-    int i = 0, j = j0, moves_a = 0, moves_b = 0;
-    while (moves_a < m || moves_b < n) {
-        const int i1 = (i + 1) % m, j1 = (j + n - 1) % n;
-        const bool can_a = moves_a < m && balanced(moves_a + 1, moves_b);
-        const bool can_b = moves_b < n && balanced(moves_a, moves_b + 1);
-        assert(can_a || can_b);
-        if (can_a && (!can_b || glm::distance(pa[i1], pb[j]) <= glm::distance(pa[i], pb[j1]))) {
-            writer.add(a[i], a[i1], b[j]);
-            i = i1;
-            ++moves_a;
-        } else {
-            writer.add(b[j1], b[j], a[i]);
-            j = j1;
-            ++moves_b;
-        }
-    }
+    const TubeStrips strips(a, m, b, n, f);
+    const Strip strip = strips.best();
+    strips.emit(strip, out);
+    if (strip.block_begin >= 0) out.interior_vertex_edges = strips.edges();
 }
 
 }  // namespace
@@ -238,7 +336,12 @@ CellTriangulation triangulate_cell(const std::array<double, 8>& corner_values) {
     const mc33::CellLoops& loops = mc33::cell_loops(decision.config, decision.joined_faces);
     for (int l = 0; l < loops.loop_count; ++l) {
         if (l == decision.tube[0] || l == decision.tube[1]) continue;
-        triangulate_disk(&loops.vertices[loops.loop_begin[l]], loops.loop_size(l), out);
+        for (int t = loops.disk_begin[l]; t < loops.disk_begin[l + 1]; ++t) {
+            out.triangles[out.triangle_count++] = loops.triangles[t];
+        }
+        if (loops.triangles[loops.disk_begin[l]][2] == kInteriorVertex) {
+            out.interior_vertex_edges = loops.interior_vertex_edges;
+        }
     }
     if (decision.tube[0] >= 0) {
         const int la = decision.tube[0], lb = decision.tube[1];

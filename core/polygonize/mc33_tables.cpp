@@ -14,6 +14,9 @@
 #include <cassert>
 #include <vector>
 
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
 #include "polygonize/mc33.h"
 
 namespace isomesh::mc33 {
@@ -87,6 +90,69 @@ std::array<std::uint8_t, 8> corner_patches(std::uint8_t config, std::uint8_t joi
     return patch;
 }
 
+glm::dvec3 edge_midpoint(std::uint8_t e) {
+    const auto corner = [](int c) { return glm::dvec3(c & 1, (c >> 1) & 1, (c >> 2) & 1); };
+    return 0.5 * (corner(kEdgeCorners[e][0]) + corner(kEdgeCorners[e][1]));
+}
+
+/// Minimum-weight triangulation of a polygon (dynamic programming over sub-polygons, Klincsek
+/// 1980) using no chord (diagonal lying in a face). Returns false when no such triangulation
+/// exists.
+bool triangulate_polygon(const std::uint8_t* v, int n,
+                         std::vector<std::array<std::uint8_t, 3>>& out) {
+    constexpr double kImpossible = 1e300;
+    double cost[12][12];
+    int apex[12][12];
+    const auto diagonal = [&](int i, int j) {
+        if (j == i + 1 || (i == 0 && j == n - 1)) return 0.0;  // a side of the polygon
+        return may_join(v[i], v[j], Chords::kNone)
+                   ? glm::distance(edge_midpoint(v[i]), edge_midpoint(v[j]))
+                   : kImpossible;
+    };
+    for (int gap = 1; gap < n; ++gap) {
+        for (int i = 0; i + gap < n; ++i) {
+            const int j = i + gap;
+            cost[i][j] = gap == 1 ? 0.0 : kImpossible;
+            apex[i][j] = -1;
+            for (int k = i + 1; k < j; ++k) {
+                const double c = cost[i][k] + cost[k][j] + diagonal(i, k) + diagonal(k, j);
+                if (c < cost[i][j]) {
+                    cost[i][j] = c;
+                    apex[i][j] = k;
+                }
+            }
+        }
+    }
+    if (cost[0][n - 1] >= kImpossible) return false;
+    const auto emit = [&](auto& self, int i, int j) -> void {
+        if (j - i < 2) return;
+        const int k = apex[i][j];
+        out.push_back({v[i], v[k], v[j]});
+        self(self, i, k);
+        self(self, k, j);
+    };
+    emit(emit, 0, n - 1);
+    return true;
+}
+
+void triangulate_disks(CellLoops& loops) {
+    std::vector<std::array<std::uint8_t, 3>> triangles;
+    for (int l = 0; l < loops.loop_count; ++l) {
+        loops.disk_begin[l] = static_cast<std::uint8_t>(triangles.size());
+        const std::uint8_t* v = loops.loop(l);
+        const int n = loops.loop_size(l);
+        if (n < 7 && triangulate_polygon(v, n, triangles)) continue;
+        assert(loops.interior_vertex_edges == 0);  // one interior vertex per cell
+        for (int i = 0; i < n; ++i) {
+            triangles.push_back({v[i], v[(i + 1) % n], kInteriorVertex});
+            loops.interior_vertex_edges |= static_cast<std::uint16_t>(1u << v[i]);
+        }
+    }
+    loops.disk_begin[loops.loop_count] = static_cast<std::uint8_t>(triangles.size());
+    assert(triangles.size() <= loops.triangles.size());
+    std::copy(triangles.begin(), triangles.end(), loops.triangles.begin());
+}
+
 CellLoops build_loops(std::uint8_t config, std::uint8_t joined_faces) {
     CellLoops loops;
     loops.corner_patch = corner_patches(config, joined_faces, loops.patch_count);
@@ -109,6 +175,7 @@ CellLoops build_loops(std::uint8_t config, std::uint8_t joined_faces) {
         loops.loop_patches[l] = {loops.corner_patch[corners[lower_inside ? 0 : 1]],
                                  loops.corner_patch[corners[lower_inside ? 1 : 0]]};
     }
+    triangulate_disks(loops);
     return loops;
 }
 
@@ -164,6 +231,17 @@ std::uint8_t edge_between(std::uint8_t corner_a, std::uint8_t corner_b) {
     const int u = (axis == 0) ? (lo >> 1) & 1 : lo & 1;
     const int v = (axis == 2) ? (lo >> 1) & 1 : (lo >> 2) & 1;
     return static_cast<std::uint8_t>(4 * axis + u + 2 * v);
+}
+
+std::uint8_t edge_faces(std::uint8_t edge) {
+    const auto& c = kEdgeCorners[edge];
+    std::uint8_t faces = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+        const int bit = 1 << axis;
+        if ((c[0] & bit) != (c[1] & bit)) continue;  // the edge runs along this axis
+        faces |= static_cast<std::uint8_t>(1u << (2 * axis + ((c[0] & bit) ? 1 : 0)));
+    }
+    return faces;
 }
 
 std::uint8_t ambiguous_faces(std::uint8_t config) {

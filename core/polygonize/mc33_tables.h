@@ -30,6 +30,31 @@ inline constexpr std::array<std::array<std::uint8_t, 4>, 6> kFaceCorners{{
 /// The edge joining two corners of the cell that differ in exactly one coordinate.
 std::uint8_t edge_between(std::uint8_t corner_a, std::uint8_t corner_b);
 
+/// Bit f set for the two faces containing edge e.
+std::uint8_t edge_faces(std::uint8_t edge);
+
+/// Which segments between two vertices on one face (chords across an ambiguous face: they lie in
+/// the face) a triangulation may use. The neighbouring cell must not draw the same chord, or the
+/// edge would have four triangles: disks never use chords, and tubes use them only when they must
+/// (see mc33.cpp), preferring the chords of the faces the cell owns: those above it on each axis
+/// (faces 1, 3 and 5); the cell across such a face draws no chord there before its last resort.
+enum class Chords { kNone, kOwned, kAny };
+
+/// Whether edge vertices a and b may be joined by a triangle edge inside the cell.
+inline bool may_join(std::uint8_t edge_a, std::uint8_t edge_b, Chords chords) {
+    constexpr std::uint8_t kLowerFaces = 0b010101;
+    const std::uint8_t shared = edge_faces(edge_a) & edge_faces(edge_b);
+    switch (chords) {
+        case Chords::kNone:
+            return shared == 0;
+        case Chords::kOwned:
+            return (shared & kLowerFaces) == 0;
+        case Chords::kAny:
+            return true;
+    }
+    return false;
+}
+
 /// Bit f set when face f is ambiguous for this configuration (bit i = corner i inside): its
 /// diagonal corners have equal signs and its adjacent corners differ, so the face test decides.
 std::uint8_t ambiguous_faces(std::uint8_t config);
@@ -50,8 +75,17 @@ struct CellLoops {
     std::uint8_t patch_count = 0;
     /// loop_patches[l] = {inside patch, outside patch} on either side of loop l.
     std::array<std::array<std::uint8_t, 2>, kMaxLoops> loop_patches{};
+    /// The disk over loop l is triangles[disk_begin[l] .. disk_begin[l + 1]), oriented like the
+    /// loop. Loops of 7 or more vertices, and loops that no triangulation can cover without a
+    /// chord, are fanned around kInteriorVertex (at most one loop per cell); the others get the
+    /// triangulation of least total diagonal length (at the edge midpoints) without chords.
+    std::array<std::uint8_t, kMaxLoops + 1> disk_begin{};
+    std::array<std::array<std::uint8_t, 3>, 12> triangles{};
+    /// Bit e set for the edges of the loop fanned around kInteriorVertex, if any.
+    std::uint16_t interior_vertex_edges = 0;
 
     std::uint8_t loop_size(int l) const { return loop_begin[l + 1] - loop_begin[l]; }
+    const std::uint8_t* loop(int l) const { return &vertices[loop_begin[l]]; }
 };
 
 /// The loops of configuration `config` when the inside corners are joined across exactly the
