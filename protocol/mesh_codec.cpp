@@ -30,11 +30,6 @@ Error frame_error(std::string message) {
     return Error{ErrorCode::bad_frame, std::move(message)};
 }
 
-TriangleKey rotated_to_smallest(const std::array<std::uint32_t, 3>& v) {
-    const std::size_t first = std::min_element(v.begin(), v.end()) - v.begin();
-    return {v[first], v[(first + 1) % 3], v[(first + 2) % 3]};
-}
-
 bool repeats_a_vertex(const std::array<std::uint32_t, 3>& v) {
     return v[0] == v[1] || v[1] == v[2] || v[0] == v[2];
 }
@@ -154,7 +149,7 @@ Result<std::vector<std::uint32_t>> match_decoded_order(std::span<const Triangle>
         std::vector<std::pair<TriangleKey, std::uint32_t>> keys;
         keys.reserve(triangles.size());
         for (std::size_t i = 0; i < triangles.size(); ++i) {
-            keys.emplace_back(rotated_to_smallest(triangles[i].vertices),
+            keys.emplace_back(canonical_rotation(triangles[i].vertices),
                               static_cast<std::uint32_t>(i));
         }
         std::sort(keys.begin(), keys.end());  // equal keys keep index order: deterministic
@@ -242,6 +237,11 @@ Result<DecodedMesh> read_draco_mesh(const draco::Mesh& mesh) {
 }
 
 }  // namespace
+
+std::array<std::uint32_t, 3> canonical_rotation(const std::array<std::uint32_t, 3>& v) {
+    const std::size_t first = std::min_element(v.begin(), v.end()) - v.begin();
+    return {v[first], v[(first + 1) % 3], v[(first + 2) % 3]};
+}
 
 QuantizationGrid QuantizationGrid::for_box(const std::array<double, 6>& box, int position_bits) {
     const glm::dvec3 low(box[0], box[2], box[4]);

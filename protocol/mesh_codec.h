@@ -44,6 +44,10 @@ struct Triangle {
     friend bool operator==(const Triangle&, const Triangle&) = default;
 };
 
+/// The corners rotated to start at the smallest id, orientation kept. Decoding may rotate a
+/// triangle's corners (never mirror them): compare triangles by this form.
+std::array<std::uint32_t, 3> canonical_rotation(const std::array<std::uint32_t, 3>& vertices);
+
 /// The fixed position grid of a session: positions are clamped to the cube [origin, origin +
 /// range]^3 and rounded to one of 2^bits - 1 steps per axis.
 struct QuantizationGrid {

@@ -527,6 +527,9 @@ Envelope read_envelope(std::string_view text, const ParseLimits& limits, bool fr
         e.error =
             Error{ErrorCode::bad_json, "invalid JSON at byte " + std::to_string(failure.byte)};
         return e;
+    } catch (const json::exception&) {  // e.g. a number beyond double's range
+        e.error = Error{ErrorCode::bad_json, "invalid JSON: a number is out of range"};
+        return e;
     }
     if (!e.document.is_object()) {
         e.error = Error{ErrorCode::bad_json, "a message must be a JSON object"};

@@ -35,7 +35,7 @@ MeshReplica::Outcome MeshReplica::apply(const DecodedFrame& frame) {
 std::vector<FrameTriangle> MeshReplica::sorted_triangles() const {
     std::vector<FrameTriangle> out;
     out.reserve(triangles_.size());
-    for (const auto& [id, vertices] : triangles_) out.push_back({id, vertices});
+    for (const auto& [id, vertices] : triangles_) out.push_back({id, canonical_rotation(vertices)});
     std::sort(out.begin(), out.end(),
               [](const FrameTriangle& a, const FrameTriangle& b) { return a.id < b.id; });
     return out;

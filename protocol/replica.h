@@ -36,7 +36,7 @@ class MeshReplica {
     }
     const std::unordered_map<std::uint32_t, Vertex>& vertices() const { return vertices_; }
 
-    /// The triangles sorted by id, for comparing replicas.
+    /// The triangles sorted by id, corners in canonical_rotation, for comparing meshes.
     std::vector<FrameTriangle> sorted_triangles() const;
 
   private:

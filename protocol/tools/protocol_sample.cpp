@@ -28,14 +28,6 @@ using nlohmann::ordered_json;
 
 constexpr std::uint64_t kSampleTime = 1'700'000'000'000'000;
 
-SessionId sample_session() {
-    SessionId id;
-    for (std::size_t i = 0; i < id.bytes.size(); ++i) {
-        id.bytes[i] = static_cast<std::uint8_t>(0x10 * i + 0x0f - i);
-    }
-    return id;
-}
-
 void write_bytes(const fs::path& path, const std::vector<std::uint8_t>& bytes) {
     std::ofstream out(path, std::ios::binary);
     out.write(reinterpret_cast<const char*>(bytes.data()),
@@ -73,74 +65,32 @@ ordered_json frame_json(const std::string& file, const DecodedFrame& frame) {
             {"triangles", triangles_json(frame.triangles)}};
 }
 
-/// A refining sphere: keyframe of an icosphere, three deltas splitting caps 1-to-4, one delta
-/// removing a few triangles only, and a catch-up keyframe of the final mesh.
+/// Writes the sample session's frames and what the C++ decoder and replica make of them.
 int write_frames(const fs::path& dir) {
     fs::create_directories(dir);
-    MeshEncoding encoding;
-    encoding.grid = QuantizationGrid::for_box({-1.5, 1.5, -1.5, 1.5, -1.5, 1.5});
-    auto mesh = samples::icosphere(2);
-    FrameInfo info{FrameKind::keyframe, 0, sample_session(), 0, kSampleTime, 1};
-
-    std::vector<std::uint64_t> ids(mesh.triangles.size());
-    for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = 1000 + 7 * i;  // not consecutive
-    std::vector<std::vector<std::uint8_t>> frames;
-    auto keyframe = encode_keyframe(info, mesh.vertices, mesh.triangles, ids, encoding);
-    if (!keyframe) return std::fprintf(stderr, "%s\n", keyframe.error().message.c_str()), 1;
-    frames.push_back(keyframe.value().bytes);
-
-    std::uint64_t next_triangle_id = 100000;
-    const glm::vec3 directions[] = {{0, 0, 1}, {1, 0.2f, 0}, {-0.3f, -1, 0.1f}};
-    info.kind = FrameKind::delta;
-    for (const glm::vec3& direction : directions) {
-        const auto chosen = samples::cap(mesh, direction, 25);
-        const auto split =
-            samples::subdivide(mesh, chosen, static_cast<std::uint32_t>(mesh.vertices.size()));
-        std::vector<std::uint64_t> removed;
-        for (std::size_t i : chosen) removed.push_back(ids[i]);
-        ++info.sequence;
-        info.timestamp_us += 20'000;
-        std::vector<Vertex> all = mesh.vertices;
-        all.insert(all.end(), split.vertices.begin(), split.vertices.end());
-        auto delta = encode_delta(info, removed, all, split.triangles, next_triangle_id, encoding);
-        if (!delta) return std::fprintf(stderr, "%s\n", delta.error().message.c_str()), 1;
-        frames.push_back(delta.value().bytes);
-        next_triangle_id += split.triangles.size();
-        // The sender's own bookkeeping: drop the split triangles, append the new ones.
-        for (auto it = chosen.rbegin(); it != chosen.rend(); ++it) {
-            mesh.triangles.erase(mesh.triangles.begin() + static_cast<std::ptrdiff_t>(*it));
-            ids.erase(ids.begin() + static_cast<std::ptrdiff_t>(*it));
-        }
-        mesh.vertices = std::move(all);
-        mesh.triangles.insert(mesh.triangles.end(), split.triangles.begin(), split.triangles.end());
-        ids.insert(ids.end(), delta.value().triangle_ids.begin(), delta.value().triangle_ids.end());
-    }
-    ++info.sequence;
-    info.flags = frame_flags::converged;
-    const std::vector<std::uint64_t> removed_only = {ids[3], ids[5], ids.back()};
-    auto removal = encode_delta(info, removed_only, {}, {}, 0, encoding);
-    if (!removal) return std::fprintf(stderr, "%s\n", removal.error().message.c_str()), 1;
-    frames.push_back(removal.value().bytes);
-
+    const samples::SampleSession session = samples::refining_sphere_session();
     MeshReplica replica;
     ordered_json manifest = {{"frames", ordered_json::array()}};
-    for (std::size_t i = 0; i < frames.size(); ++i) {
+    for (std::size_t i = 0; i < session.frames.size(); ++i) {
         const std::string name = "frame" + std::to_string(i) + ".bin";
-        write_bytes(dir / name, frames[i]);
-        auto decoded = decode_frame(frames[i]);
+        write_bytes(dir / name, session.frames[i]);
+        auto decoded = decode_frame(session.frames[i]);
         if (!decoded || replica.apply(decoded.value()) != MeshReplica::Outcome::applied) {
             return std::fprintf(stderr, "sample frame %zu does not apply\n", i), 1;
         }
         manifest["frames"].push_back(frame_json(name, decoded.value()));
     }
-    manifest["final_triangles"] = triangles_json(replica.sorted_triangles());
+    if (replica.sorted_triangles() != session.final_triangles) {
+        return std::fprintf(stderr, "replica differs from the sender's mesh\n"), 1;
+    }
+    manifest["final_triangles"] = triangles_json(session.final_triangles);
     write_text(dir / "frames.json", manifest.dump(1));
-    std::printf("wrote %zu frames to %s\n", frames.size(), dir.c_str());
+    std::printf("wrote %zu frames to %s\n", session.frames.size(), dir.c_str());
     return 0;
 }
 
 std::vector<std::pair<std::string, std::string>> sample_messages() {
-    const SessionId session = sample_session();
+    const SessionId session = samples::sample_session_id();
     const Box box = {-2, 2, -2, 2, -2, 2};
     const Constraints all{20000, 0.001, "epsilon4"};
     const SessionState state{3, "x^2+y^2+z^2=a", {{"a", 4}}, box, all};
@@ -201,7 +151,7 @@ Measure measure_split_delta(const samples::SampleMesh& sphere, std::size_t count
     std::vector<Vertex> all = sphere.vertices;
     all.insert(all.end(), split.vertices.begin(), split.vertices.end());
     std::vector<std::uint64_t> removed(chosen.begin(), chosen.end());
-    FrameInfo info{FrameKind::delta, 0, sample_session(), 1, kSampleTime, 1};
+    FrameInfo info{FrameKind::delta, 0, samples::sample_session_id(), 1, kSampleTime, 1};
     auto frame = encode_delta(info, removed, all, split.triangles, 1 << 20, encoding);
     if (!frame) return {};
     const auto header = read_frame_header(frame.value().bytes);

@@ -2,6 +2,8 @@
 #include "protocol/tools/sample_mesh.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <numeric>
 
@@ -133,10 +135,95 @@ Subdivision subdivide(const SampleMesh& mesh, const std::vector<std::size_t>& in
     return out;
 }
 
-SampleMesh merged(SampleMesh mesh, const Subdivision& more) {
-    mesh.vertices.insert(mesh.vertices.end(), more.vertices.begin(), more.vertices.end());
-    mesh.triangles.insert(mesh.triangles.end(), more.triangles.begin(), more.triangles.end());
-    return mesh;
+SessionId sample_session_id() {
+    SessionId id;
+    for (std::size_t i = 0; i < id.bytes.size(); ++i) {
+        id.bytes[i] = static_cast<std::uint8_t>(0x11 * i);
+    }
+    return id;
+}
+
+namespace {
+
+/// The sender's side of a session: the current mesh with each triangle's wire id.
+struct SenderMesh {
+    SampleMesh mesh;
+    std::vector<std::uint64_t> ids;
+
+    /// Replaces the triangles at `chosen` (ascending) by `split`, numbered `split_ids`.
+    void apply_split(const std::vector<std::size_t>& chosen, Subdivision split,
+                     const std::vector<std::uint64_t>& split_ids) {
+        for (auto it = chosen.rbegin(); it != chosen.rend(); ++it) {
+            mesh.triangles.erase(mesh.triangles.begin() + static_cast<std::ptrdiff_t>(*it));
+            ids.erase(ids.begin() + static_cast<std::ptrdiff_t>(*it));
+        }
+        mesh.vertices.insert(mesh.vertices.end(), split.vertices.begin(), split.vertices.end());
+        mesh.triangles.insert(mesh.triangles.end(), split.triangles.begin(), split.triangles.end());
+        ids.insert(ids.end(), split_ids.begin(), split_ids.end());
+    }
+
+    std::vector<FrameTriangle> sorted() const {
+        std::vector<FrameTriangle> out;
+        for (std::size_t i = 0; i < ids.size(); ++i)
+            out.push_back({ids[i], canonical_rotation(mesh.triangles[i].vertices)});
+        std::sort(out.begin(), out.end(),
+                  [](const FrameTriangle& a, const FrameTriangle& b) { return a.id < b.id; });
+        return out;
+    }
+};
+
+/// Sample inputs are valid by construction: a failure here is a bug in the library.
+template <class T>
+T expect_ok(Result<T> result) {
+    if (!result.ok()) {
+        std::fprintf(stderr, "sample session: %s\n", result.error().message.c_str());
+        std::abort();
+    }
+    return std::move(result).value();
+}
+
+}  // namespace
+
+SampleSession refining_sphere_session() {
+    MeshEncoding encoding;
+    encoding.grid = QuantizationGrid::for_box({-1.5, 1.5, -1.5, 1.5, -1.5, 1.5});
+    FrameInfo info{FrameKind::keyframe, 0, sample_session_id(), 0, 1'700'000'000'000'000, 1};
+    SenderMesh sender{icosphere(2), {}};
+    for (std::size_t i = 0; i < sender.mesh.triangles.size(); ++i)
+        sender.ids.push_back(1000 + 7 * i);
+
+    SampleSession session;
+    session.frames.push_back(expect_ok(encode_keyframe(info, sender.mesh.vertices,
+                                                       sender.mesh.triangles, sender.ids, encoding))
+                                 .bytes);
+    info.kind = FrameKind::delta;
+    std::uint64_t next_triangle_id = 100000;
+    for (const glm::vec3 direction :
+         {glm::vec3(0, 0, 1), glm::vec3(1, 0.2f, 0), glm::vec3(-0.3f, -1, 0.1f)}) {
+        const auto chosen = cap(sender.mesh, direction, 25);
+        auto split =
+            subdivide(sender.mesh, chosen, static_cast<std::uint32_t>(sender.mesh.vertices.size()));
+        std::vector<std::uint64_t> removed;
+        for (std::size_t i : chosen) removed.push_back(sender.ids[i]);
+        std::vector<Vertex> all = sender.mesh.vertices;
+        all.insert(all.end(), split.vertices.begin(), split.vertices.end());
+        ++info.sequence;
+        info.timestamp_us += 20'000;
+        auto delta = expect_ok(
+            encode_delta(info, removed, all, split.triangles, next_triangle_id, encoding));
+        session.frames.push_back(delta.bytes);
+        next_triangle_id += split.triangles.size();
+        sender.apply_split(chosen, std::move(split), delta.triangle_ids);
+    }
+    ++info.sequence;
+    info.flags = frame_flags::converged;
+    const std::vector<std::size_t> dropped = {3, 5, sender.ids.size() - 1};
+    std::vector<std::uint64_t> removed;
+    for (std::size_t i : dropped) removed.push_back(sender.ids[i]);
+    session.frames.push_back(expect_ok(encode_delta(info, removed, {}, {}, 0, encoding)).bytes);
+    sender.apply_split(dropped, {}, {});
+    session.final_triangles = sender.sorted();
+    return session;
 }
 
 }  // namespace isomesh::protocol::samples

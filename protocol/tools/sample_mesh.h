@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "protocol/frame.h"
 #include "protocol/mesh_codec.h"
 
 namespace isomesh::protocol::samples {
@@ -34,7 +35,16 @@ struct Subdivision {
 Subdivision subdivide(const SampleMesh& mesh, const std::vector<std::size_t>& indices,
                       std::uint32_t first_new_id, float radius = 1.0f);
 
-/// `mesh` with `more` appended (vertices and triangles).
-SampleMesh merged(SampleMesh mesh, const Subdivision& more);
+/// The frames of a refining sphere as a server would send them: a keyframe of an icosphere with
+/// non-consecutive triangle ids, three deltas each splitting a cap 1-to-4, and a delta that only
+/// removes triangles (flagged converged). `final_triangles`: the sender's mesh after the last
+/// frame, sorted by id.
+struct SampleSession {
+    std::vector<std::vector<std::uint8_t>> frames;
+    std::vector<FrameTriangle> final_triangles;
+};
+SampleSession refining_sphere_session();
+
+SessionId sample_session_id();
 
 }  // namespace isomesh::protocol::samples
