@@ -1,0 +1,223 @@
+// Forward-mode automatic differentiation over a tape (Wengert 1964; Griewank & Walther, "Evaluating
+// Derivatives", 2008, chapter 3), written once for two number types:
+//   - double: dual numbers, f and grad f at a point (Evaluator::value_gradient);
+//   - IntervalValue: interval forward mode, enclosures of f and grad f over a box
+//     (Evaluator::interval_gradient).
+// Because both run the very same derivative formulas, operation by operation, and each interval
+// operation encloses its point counterpart, the interval gradient encloses the computed point
+// gradient at every point of the box (where that gradient is a number).
+#pragma once
+
+#include <cassert>
+#include <numbers>
+#include <span>
+#include <vector>
+
+#include "eval/interval_math.h"
+#include "eval/tape_ops.h"
+#include "tape/op_math.h"
+
+namespace isomesh::forward_mode {
+
+// The arithmetic of the two number types.
+inline double unary(Op op, double a, double imm = 0.0) {
+    return apply_unary(op, a, imm);
+}
+inline double binary(Op op, double a, double b) {
+    return apply_binary(op, a, b);
+}
+inline IntervalValue unary(Op op, const IntervalValue& a, double imm = 0.0) {
+    return interval_unary(op, a, imm);
+}
+inline IntervalValue binary(Op op, const IntervalValue& a, const IntervalValue& b) {
+    return interval_binary(op, a, b);
+}
+
+template <class T>
+T constant(double c);
+template <>
+inline double constant<double>(double c) {
+    return c;
+}
+template <>
+inline IntervalValue constant<IntervalValue>(double c) {
+    return interval_constant(c);
+}
+
+/// partial * d, exactly 0 when the tangent d is 0: a zero tangent contributes nothing, even where
+/// the partial is infinite or NaN (x^c with a negative base has ln(x) = NaN in d/dc, but c is
+/// constant).
+inline double term(double partial, double d) {
+    return d == 0.0 ? 0.0 : partial * d;
+}
+inline IntervalValue term(const IntervalValue& partial, const IntervalValue& d) {
+    if (d.value.lo == 0.0 && d.value.hi == 0.0) return constant<IntervalValue>(0.0);
+    IntervalValue t = interval_binary(Op::Mul, partial, d);
+    if (d.value.contains(0.0)) t.value = hull(t.value, {0.0, 0.0});
+    return t;
+}
+
+/// d op(a) / da, from the operand a and the result r = op(a).
+template <class T>
+T unary_partial(Op op, const T& a, const T& r, double imm) {
+    auto c = [](double v) { return constant<T>(v); };
+    auto mul = [](const T& x, const T& y) { return binary(Op::Mul, x, y); };
+    auto div = [](const T& x, const T& y) { return binary(Op::Div, x, y); };
+    auto square = [](const T& x) { return unary(Op::Square, x); };
+    switch (op) {
+        case Op::Neg:
+            return c(-1.0);
+        case Op::Square:
+            return mul(c(2.0), a);
+        case Op::PowInt:
+            return imm == 0.0 ? c(0.0) : mul(c(imm), unary(Op::PowInt, a, imm - 1.0));
+        case Op::Sqrt:
+            return div(c(0.5), r);
+        case Op::Cbrt:
+            return div(c(1.0), mul(c(3.0), square(r)));
+        case Op::Abs:
+            return unary(Op::Sgn, a);
+        case Op::Exp:
+            return r;
+        case Op::Ln:
+            return div(c(1.0), a);
+        case Op::Log10:
+            return div(c(1.0), mul(a, c(std::numbers::ln10)));
+        case Op::Log2:
+            return div(c(1.0), mul(a, c(std::numbers::ln2)));
+        case Op::Sin:
+            return unary(Op::Cos, a);
+        case Op::Cos:
+            return unary(Op::Neg, unary(Op::Sin, a));
+        case Op::Tan:
+            return binary(Op::Add, c(1.0), square(r));
+        case Op::Asin:
+            return div(c(1.0), unary(Op::Sqrt, binary(Op::Sub, c(1.0), square(a))));
+        case Op::Acos:
+            return div(c(-1.0), unary(Op::Sqrt, binary(Op::Sub, c(1.0), square(a))));
+        case Op::Atan:
+            return div(c(1.0), binary(Op::Add, c(1.0), square(a)));
+        case Op::Sinh:
+            return unary(Op::Cosh, a);
+        case Op::Cosh:
+            return unary(Op::Sinh, a);
+        case Op::Tanh:
+            return binary(Op::Sub, c(1.0), square(r));
+        default:
+            return c(0.0);  // sgn, floor, ceil, round: zero wherever differentiable
+    }
+}
+
+template <class T>
+struct Partials {
+    T da, db;
+};
+
+/// (d op(a, b) / da, d op(a, b) / db) for the arithmetic operations (not min and max), from the
+/// operands and the result r = op(a, b).
+template <class T>
+Partials<T> binary_partials(Op op, const T& a, const T& b, const T& r) {
+    auto c = [](double v) { return constant<T>(v); };
+    auto neg = [](const T& x) { return unary(Op::Neg, x); };
+    auto div = [](const T& x, const T& y) { return binary(Op::Div, x, y); };
+    switch (op) {
+        case Op::Add:
+            return {c(1.0), c(1.0)};
+        case Op::Sub:
+            return {c(1.0), c(-1.0)};
+        case Op::Mul:
+            return {b, a};
+        case Op::Div:
+            return {div(c(1.0), b), neg(div(r, b))};
+        case Op::Pow:
+            return {binary(Op::Mul, b, binary(Op::Pow, a, binary(Op::Sub, b, c(1.0)))),
+                    binary(Op::Mul, r, unary(Op::Ln, a))};
+        case Op::Atan2: {
+            T norm = binary(Op::Add, unary(Op::Square, a), unary(Op::Square, b));
+            return {div(b, norm), neg(div(a, norm))};
+        }
+        default:
+            assert(!"min and max select a gradient instead");
+            return {c(0.0), c(0.0)};
+    }
+}
+
+/// Which operand's gradient min or max takes.
+enum class Pick { A, B, Either };
+
+/// At a point: the operand apply_binary returns (b on ties, as a < b ? a : b does).
+inline Pick pick(Op op, double a, double b) {
+    return (op == Op::Min ? a < b : a > b) ? Pick::A : Pick::B;
+}
+
+/// Over a box: the operand that is returned at every point, when the intervals prove it.
+inline Pick pick(Op op, const IntervalValue& a, const IntervalValue& b) {
+    const Interval& x = a.value;
+    const Interval& y = b.value;
+    if (x.is_empty() || y.is_empty()) return Pick::Either;
+    if (op == Op::Min ? x.hi < y.lo : x.lo > y.hi) return Pick::A;
+    if (op == Op::Min ? y.hi < x.lo : y.lo > x.hi) return Pick::B;
+    return Pick::Either;
+}
+
+inline double either(double a, double) {
+    return a;
+}
+inline IntervalValue either(const IntervalValue& a, const IntervalValue& b) {
+    return {hull(a.value, b.value), a.maybe_discontinuous || b.maybe_discontinuous,
+            a.maybe_undefined || b.maybe_undefined};
+}
+
+/// A value with its gradient.
+template <class T>
+struct Tangent {
+    T value;
+    T grad[3];
+};
+
+/// Runs `code` in forward mode and returns the tangent of its last instruction. `leaf(ins)` gives
+/// the value of a leaf instruction (constants and variables; parameters are bound to constants).
+/// `slots` is scratch memory, resized as needed.
+template <class T, class Leaf>
+Tangent<T> differentiate(std::span<const Instruction> code, std::vector<Tangent<T>>& slots,
+                         const Leaf& leaf) {
+    assert(!code.empty());
+    if (slots.size() < code.size()) slots.resize(code.size());
+    const T zero = constant<T>(0.0), one = constant<T>(1.0);
+    for (std::size_t i = 0; i < code.size(); ++i) {
+        const Instruction& ins = code[i];
+        Tangent<T>& out = slots[i];
+        if (is_leaf(ins.op)) {
+            out.value = leaf(ins);
+            for (int k = 0; k < 3; ++k) out.grad[k] = zero;
+            if (ins.op >= Op::VarX && ins.op <= Op::VarZ)
+                out.grad[static_cast<int>(ins.op) - 1] = one;
+            continue;
+        }
+        const Tangent<T>& a = slots[ins.a];
+        if (is_unary(ins.op)) {
+            out.value = unary(ins.op, a.value, ins.imm);
+            T partial = unary_partial(ins.op, a.value, out.value, ins.imm);
+            for (int k = 0; k < 3; ++k) out.grad[k] = term(partial, a.grad[k]);
+            continue;
+        }
+        const Tangent<T>& b = slots[ins.b];
+        out.value = binary(ins.op, a.value, b.value);
+        if (ins.op == Op::Min || ins.op == Op::Max) {
+            Pick p = pick(ins.op, a.value, b.value);
+            for (int k = 0; k < 3; ++k) {
+                out.grad[k] = p == Pick::A   ? a.grad[k]
+                              : p == Pick::B ? b.grad[k]
+                                             : either(a.grad[k], b.grad[k]);
+            }
+            continue;
+        }
+        Partials<T> partial = binary_partials(ins.op, a.value, b.value, out.value);
+        for (int k = 0; k < 3; ++k) {
+            out.grad[k] = binary(Op::Add, term(partial.da, a.grad[k]), term(partial.db, b.grad[k]));
+        }
+    }
+    return slots[code.size() - 1];
+}
+
+}  // namespace isomesh::forward_mode

@@ -1,0 +1,46 @@
+// A tape prepared for evaluation: parameters bound to their values, and a register-allocated form
+// of the same instructions for the batch evaluator.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "eval/batch_kernels.h"
+#include "tape/tape.h"
+
+namespace isomesh {
+
+/// One batch instruction: registers[out] = kernel(registers[a], registers[b], imm) over a block.
+struct BatchStep {
+    BatchKernel kernel;
+    std::uint32_t out;
+    std::uint32_t a;
+    std::uint32_t b;
+    double imm;
+};
+
+/// Batch registers: x, y and z of the block's points, the caller's output array, then scratch.
+inline constexpr std::uint32_t kOutputRegister = 3;
+inline constexpr std::uint32_t kFirstScratchRegister = 4;
+
+struct TapeProgram {
+    /// SSA code as in a Tape, with no Param instruction (bound to Const).
+    std::vector<Instruction> code;
+    /// The live instructions with registers assigned by a linear scan over last uses (a register
+    /// is reused once its value is dead), constants folded into immediate operands. The last step
+    /// writes kOutputRegister.
+    std::vector<BatchStep> steps;
+    std::uint32_t scratch_registers = 0;
+    /// Number of min and max instructions: what simplification on a box can prune.
+    std::size_t choices = 0;
+};
+
+/// The code of `tape` with each Param instruction replaced by a Const of its value.
+/// Precondition: tape.validate() is empty and params.size() == tape.params.size().
+std::vector<Instruction> substitute_parameters(const Tape& tape, std::span<const double> params);
+
+/// Prepares `code` (a valid SSA tape without Param instructions) for evaluation.
+TapeProgram make_program(std::vector<Instruction> code);
+
+}  // namespace isomesh

@@ -1,0 +1,282 @@
+// The evaluator conformance suite: every Field backend (tape fields with and without
+// simplification, grid fields) against the contract of eval/evaluator.h, on the functions of
+// test_support.cpp. Checks that cannot apply to a backend (a std:: reference for a sampled grid)
+// are skipped for it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <sstream>
+
+#include <glm/geometric.hpp>
+
+#include "eval/grid_field.h"
+#include "eval/tape_field.h"
+#include "test_support.h"
+
+namespace isomesh::testing {
+namespace {
+
+struct Backend {
+    std::string name;
+    std::shared_ptr<const Field> field;
+    TestFunction function;  // its tape is null and reference empty for grids
+};
+
+/// A grid sampling g on an uneven lattice over a box, so cells are not cubes.
+template <class G>
+IsoGrid sampled_grid(int nx, int ny, int nz, const Box& box, const G& g) {
+    IsoGrid grid{nx, ny, nz, box, {}};
+    for (int k = 0; k < nz; ++k)
+        for (int j = 0; j < ny; ++j)
+            for (int i = 0; i < nx; ++i) {
+                glm::dvec3 t(i / (nx - 1.0), j / (ny - 1.0), k / (nz - 1.0));
+                grid.samples.push_back(static_cast<float>(g(box.lo + t * box.size())));
+            }
+    return grid;
+}
+
+std::vector<Backend> backends() {
+    std::vector<Backend> all;
+    for (const TestFunction& f : test_functions()) {
+        all.push_back(
+            {f.name + "_simplified", make_tape_field(f.tape, f.params, {.simplify = true}), f});
+        all.push_back(
+            {f.name + "_plain", make_tape_field(f.tape, f.params, {.simplify = false}), f});
+    }
+    Box box{{-1.5, -1.2, -1.0}, {1.5, 1.3, 1.6}};
+    IsoGrid smooth = sampled_grid(9, 7, 11, box, [](const glm::dvec3& p) {
+        return p.x * p.x + p.y * p.y + p.z * p.z - 1.0 + 0.3 * std::sin(4 * p.x);
+    });
+    std::vector<glm::dvec3> faces = {{0.0, 0.05, 0.04}, {-1.5, -1.2, -1.0}, {1.5, 1.3, 1.6}};
+    all.push_back(
+        {"grid_smooth", make_grid_field(smooth), {"grid_smooth", nullptr, {}, {}, 1.8, faces}});
+    Rng rng(7);
+    IsoGrid noisy = sampled_grid(5, 4, 3, {{0, 0, 0}, {1, 1, 1}}, [&rng](const glm::dvec3&) {
+        return std::uniform_real_distribution<double>(-1.0, 1.0)(rng);
+    });
+    all.push_back({"grid_noisy",
+                   make_grid_field(noisy),
+                   {"grid_noisy", nullptr, {}, {}, 1.2, {{0.25, 1.0 / 3, 0.5}}}});
+    return all;
+}
+
+class EvaluatorConformance : public ::testing::TestWithParam<Backend> {
+  protected:
+    const TestFunction& function() const { return GetParam().function; }
+    std::unique_ptr<Evaluator> evaluator() const { return GetParam().field->make_evaluator(); }
+
+    /// Random points over the sampling cube, after the special points unless told otherwise.
+    std::vector<glm::dvec3> random_points(Rng& rng, int count, bool with_special = true) const {
+        double s = function().scale;
+        std::vector<glm::dvec3> points;
+        if (with_special) points = function().special;
+        std::uniform_real_distribution<double> u(-s, s);
+        for (int i = 0; i < count; ++i) points.emplace_back(u(rng), u(rng), u(rng));
+        return points;
+    }
+};
+
+std::string describe(const glm::dvec3& p) {
+    std::ostringstream out;
+    out.precision(17);
+    out << "(" << p.x << ", " << p.y << ", " << p.z << ")";
+    return out.str();
+}
+
+std::string describe(const Box& box, const Interval& i) {
+    std::ostringstream out;
+    out.precision(17);
+    out << "box " << describe(box.lo) << " - " << describe(box.hi) << " interval [" << i.lo << ", "
+        << i.hi << "]";
+    return out.str();
+}
+
+TEST_P(EvaluatorConformance, values_match_point_bitwise) {
+    auto e = evaluator();
+    Rng rng(1);
+    for (std::size_t n : {0, 1, 255, 256, 257, 1000}) {
+        std::vector<glm::dvec3> points = random_points(rng, static_cast<int>(n));
+        points.resize(n);
+        std::vector<double> x, y, z, out(n, 0.0);
+        for (const auto& p : points) x.push_back(p.x), y.push_back(p.y), z.push_back(p.z);
+        e->values({x, y, z}, out);
+        for (std::size_t i = 0; i < n; ++i) {
+            ASSERT_TRUE(same_value(out[i], e->value(points[i])))
+                << "at " << describe(points[i]) << " batch " << out[i] << " point "
+                << e->value(points[i]);
+        }
+    }
+}
+
+TEST_P(EvaluatorConformance, value_gradient_value_matches_point_bitwise) {
+    auto e = evaluator();
+    Rng rng(2);
+    for (const auto& p : random_points(rng, 500)) {
+        ASSERT_TRUE(same_value(e->value_gradient(p).value, e->value(p))) << "at " << describe(p);
+    }
+}
+
+TEST_P(EvaluatorConformance, value_matches_std_reference) {
+    if (!function().reference) GTEST_SKIP() << "no closed form for a sampled grid";
+    auto e = evaluator();
+    Rng rng(3);
+    for (const auto& p : random_points(rng, 500)) {
+        double expected = function().reference(p), v = e->value(p);
+        if (std::isnan(expected)) {
+            EXPECT_TRUE(std::isnan(v)) << "at " << describe(p);
+        } else if (std::isinf(expected)) {
+            EXPECT_EQ(v, expected) << "at " << describe(p);
+        } else {
+            EXPECT_NEAR(v, expected, 1e-12 * std::max(1.0, std::fabs(expected)))
+                << "at " << describe(p);
+        }
+    }
+}
+
+TEST_P(EvaluatorConformance, interval_contains_every_point_value) {
+    auto e = evaluator();
+    Rng rng(4);
+    int failures = 0;
+    for (int n = 0; n < 400 && failures < 5; ++n) {
+        Box box = random_box(rng, function().scale, function().special);
+        IntervalValue iv = e->interval(box);
+        for (const auto& p : points_in(rng, box, function().special, 30)) {
+            double v = e->value(p);
+            bool sound = std::isnan(v) ? iv.maybe_undefined : iv.value.contains(v);
+            if (!sound && ++failures <= 5) {
+                ADD_FAILURE() << describe(box, iv.value) << " undefined " << iv.maybe_undefined
+                              << " misses f" << describe(p) << " = " << v;
+            }
+        }
+    }
+}
+
+TEST_P(EvaluatorConformance, interval_gradient_contains_point_gradients) {
+    auto e = evaluator();
+    Rng rng(5);
+    int failures = 0;
+    for (int n = 0; n < 300 && failures < 5; ++n) {
+        Box box = random_box(rng, function().scale, function().special);
+        IntervalGradient ig = e->interval_gradient(box);
+        IntervalValue iv = e->interval(box);
+        EXPECT_TRUE(same_value(ig.value.value.lo, iv.value.lo) &&
+                    same_value(ig.value.value.hi, iv.value.hi));
+        EXPECT_EQ(ig.value.maybe_undefined, iv.maybe_undefined);
+        for (const auto& p : points_in(rng, box, function().special, 20)) {
+            glm::dvec3 g = e->value_gradient(p).gradient;
+            for (int k = 0; k < 3; ++k) {
+                if (!std::isfinite(g[k]) || ig.gradient[k].contains(g[k])) continue;
+                if (++failures <= 5) {
+                    ADD_FAILURE() << describe(box, ig.gradient[k]) << " misses d/d"
+                                  << "xyz"[k] << " f" << describe(p) << " = " << g[k];
+                }
+            }
+        }
+    }
+}
+
+// Where a box is flagged neither discontinuous nor undefined, f is continuous and differentiable
+// almost everywhere on it, so the interval gradient bounds how far apart two values can be (mean
+// value theorem). A jump the flags missed (floor at an integer, a pole) breaks the bound.
+TEST_P(EvaluatorConformance, unflagged_box_obeys_gradient_bound) {
+    auto e = evaluator();
+    Rng rng(9);
+    int checked = 0;
+    for (int n = 0; n < 300; ++n) {
+        Box box = random_box(rng, function().scale, function().special);
+        IntervalGradient ig = e->interval_gradient(box);
+        if (ig.value.maybe_discontinuous || ig.value.maybe_undefined) continue;
+        glm::dvec3 lipschitz;
+        for (int k = 0; k < 3; ++k)
+            lipschitz[k] = std::max(std::fabs(ig.gradient[k].lo), std::fabs(ig.gradient[k].hi));
+        if (!std::isfinite(lipschitz.x + lipschitz.y + lipschitz.z)) continue;
+        ++checked;
+        std::vector<glm::dvec3> points = points_in(rng, box, function().special, 10);
+        double f0 = e->value(points[0]);
+        for (const auto& p : points) {
+            double f = e->value(p);
+            double bound = glm::dot(lipschitz, glm::abs(p - points[0]));
+            double rounding = 1e-12 * (1.0 + std::fabs(f) + std::fabs(f0));
+            ASSERT_LE(std::fabs(f - f0), bound + rounding)
+                << "f" << describe(points[0]) << " = " << f0 << ", f" << describe(p) << " = " << f;
+        }
+    }
+    EXPECT_GT(checked, 20);
+}
+
+TEST_P(EvaluatorConformance, gradient_matches_central_differences) {
+    auto e = evaluator();
+    Rng rng(6);
+    int checked = 0, defined = 0;
+    // Not at the special points: there a kink may be symmetric, which fools the check below.
+    for (const auto& p : random_points(rng, 300, false)) {
+        glm::dvec3 g = e->value_gradient(p).gradient;
+        if (std::isnan(e->value(p))) continue;
+        for (int k = 0; k < 3; ++k) {
+            ++defined;
+            auto difference = [&](double h) {
+                glm::dvec3 step(0.0);
+                step[k] = h;
+                return (e->value(p + step) - e->value(p - step)) / (2 * h);
+            };
+            double h = 1e-4 * std::max(1.0, std::fabs(p[k]));
+            double coarse = difference(h), fine = difference(h / 2);
+            double tolerance = 1e-4 * std::max(1.0, std::fabs(fine));
+            double rounding = 1e-15 * std::fabs(e->value(p)) / h;
+            // Where the two estimates disagree, a pole, jump or kink is too close to tell; where f
+            // is huge, rounding swamps the difference.
+            if (!std::isfinite(coarse) || !std::isfinite(fine) ||
+                std::fabs(coarse - fine) > tolerance || rounding > tolerance)
+                continue;
+            ++checked;
+            EXPECT_NEAR(g[k], fine, tolerance) << "d/d"
+                                               << "xyz"[k] << " at " << describe(p);
+        }
+    }
+    // Every function is smooth almost everywhere it is defined.
+    EXPECT_GT(checked, defined * 9 / 10);
+}
+
+TEST_P(EvaluatorConformance, push_keeps_results_inside_box) {
+    auto plain = evaluator(), pushed = evaluator();
+    const std::size_t full_size = active_tape_size(*pushed);
+    Rng rng(8);
+    for (int n = 0; n < 150; ++n) {
+        Box box = random_box(rng, function().scale, function().special);
+        pushed->push(box);
+        Box inner = box;
+        bool nested = n % 2 == 1;
+        if (nested) {
+            inner = {box.lo, box.center()};
+            pushed->push(inner);
+        }
+        std::vector<glm::dvec3> points = points_in(rng, inner, function().special, 20);
+        std::vector<double> x, y, z, batch(points.size());
+        for (const auto& p : points) {
+            x.push_back(p.x), y.push_back(p.y), z.push_back(p.z);
+            ASSERT_TRUE(same_value(pushed->value(p), plain->value(p))) << describe(p);
+            ValueGradient a = pushed->value_gradient(p), b = plain->value_gradient(p);
+            ASSERT_TRUE(same_value(a.value, b.value));
+            for (int k = 0; k < 3; ++k) ASSERT_TRUE(same_value(a.gradient[k], b.gradient[k]));
+        }
+        pushed->values({x, y, z}, batch);
+        for (std::size_t i = 0; i < points.size(); ++i)
+            ASSERT_TRUE(same_value(batch[i], plain->value(points[i]))) << describe(points[i]);
+        IntervalValue iv = pushed->interval(inner);
+        for (const auto& p : points) {
+            double v = plain->value(p);
+            ASSERT_TRUE(std::isnan(v) ? iv.maybe_undefined : iv.value.contains(v)) << describe(p);
+        }
+        if (nested) pushed->pop();
+        pushed->pop();
+        ASSERT_EQ(active_tape_size(*pushed), full_size);
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllBackends, EvaluatorConformance, ::testing::ValuesIn(backends()),
+                         [](const ::testing::TestParamInfo<Backend>& info) {
+                             return info.param.name;
+                         });
+
+}  // namespace
+}  // namespace isomesh::testing
