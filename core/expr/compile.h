@@ -6,7 +6,7 @@
 // (= 0). Reference, in the order the parser applies it:
 // - Numbers `2`, `.5`, `1e-3`; constants `pi`, `π`, `e`; variables `x`, `y`, `z`. Any other name is
 //   a parameter (`a`, `r1`, `α`), whose value is bound after compilation (expr/parameters.h).
-//   A name made only of the letters x, y, z is their product: `xy` = x*y, `xyz`, `xx` = x^2.
+//   A name made only of the letters x, y, z is read letter by letter: `xy` = x y, `xy^2` = x y^2.
 // - Operators, loosest first: `+ -`; `* /` and implicit multiplication (`2x`, `2cos(2x)`, `x y`,
 //   `(x+1)(x-1)`, `2(x+1)`, `a(x+1)`, `2|x|`), all left-associative (`1/2x` = x/2, as GeoGebra);
 //   prefix `-` and `+` (`-x^2` = -(x^2)); `^` and superscripts `²` `³` `⁻¹` `¹⁰`, right-associative

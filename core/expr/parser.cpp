@@ -15,13 +15,36 @@ constexpr int kMultiplicative = 20;
 constexpr int kPrefix = 30;
 constexpr int kPower = 40;
 
+struct BinaryOperator {
+    Op op;
+    int power;
+};
+
+/// The written binary operators + - * / (not ^, which is right-associative, nor juxtaposition).
+std::optional<BinaryOperator> explicit_operator(TokenKind kind) {
+    switch (kind) {
+        case TokenKind::Plus:
+            return BinaryOperator{Op::Add, kAdditive};
+        case TokenKind::Minus:
+            return BinaryOperator{Op::Sub, kAdditive};
+        case TokenKind::Star:
+            return BinaryOperator{Op::Mul, kMultiplicative};
+        case TokenKind::Slash:
+            return BinaryOperator{Op::Div, kMultiplicative};
+        default:
+            return std::nullopt;
+    }
+}
+
 /// Thrown at the first error and caught by parse_equation: the parser stops there.
 struct ParseFailure {
     CompileError error;
 };
 
-bool is_variable_product(std::string_view name) {
-    return name.find_first_not_of("xyz") == std::string_view::npos;
+/// The axis of a variable name (x = 0, y = 1, z = 2), or -1.
+int variable_axis(std::string_view name) {
+    if (name.size() != 1 || name[0] < 'x' || name[0] > 'z') return -1;
+    return name[0] - 'x';
 }
 
 /// Letters in a name (code points other than digits and '_'): `foo(x)` with more than one letter
@@ -81,7 +104,6 @@ class Parser {
     Slot absolute_value(const Token& open);
     Slot name(const Token& token);
     Slot parameter(const Token& token);
-    Slot variable_product(std::string_view name);
     Slot call(const Token& token, const FunctionInfo& function);
     std::vector<Slot> arguments(const Token& open);
     void close(TokenKind kind, const Token& open);
@@ -155,13 +177,8 @@ Slot Parser::expression(int min_power) {
 }
 
 int Parser::infix_power(const Token& token) const {
+    if (std::optional<BinaryOperator> binary = explicit_operator(token.kind)) return binary->power;
     switch (token.kind) {
-        case TokenKind::Plus:
-        case TokenKind::Minus:
-            return kAdditive;
-        case TokenKind::Star:
-        case TokenKind::Slash:
-            return kMultiplicative;
         case TokenKind::Caret:
         case TokenKind::Superscript:
             return kPower;
@@ -179,29 +196,18 @@ int Parser::infix_power(const Token& token) const {
 
 Slot Parser::infix(Slot left) {
     const Token& next = lexer_.peek();
-    switch (next.kind) {
-        case TokenKind::Plus:
-            lexer_.take();
-            return builder_.binary(Op::Add, left, expression(kAdditive));
-        case TokenKind::Minus:
-            lexer_.take();
-            return builder_.binary(Op::Sub, left, expression(kAdditive));
-        case TokenKind::Star:
-            lexer_.take();
-            return builder_.binary(Op::Mul, left, expression(kMultiplicative));
-        case TokenKind::Slash:
-            lexer_.take();
-            return builder_.binary(Op::Div, left, expression(kMultiplicative));
-        case TokenKind::Caret: {
-            Token caret = lexer_.take();
-            Nesting nesting(*this, caret);
-            return emit_power(builder_, left, expression(kPower - 1));  // right-associative
-        }
-        case TokenKind::Superscript:
-            return emit_power(builder_, left, builder_.constant(lexer_.take().number));
-        default:
-            return builder_.binary(Op::Mul, left, expression(kMultiplicative));
+    if (std::optional<BinaryOperator> binary = explicit_operator(next.kind)) {
+        lexer_.take();
+        return builder_.binary(binary->op, left, expression(binary->power));
     }
+    if (next.kind == TokenKind::Caret) {
+        Token caret = lexer_.take();
+        Nesting nesting(*this, caret);
+        return emit_power(builder_, left, expression(kPower - 1));  // right-associative
+    }
+    if (next.kind == TokenKind::Superscript)
+        return emit_power(builder_, left, builder_.constant(lexer_.take().number));
+    return builder_.binary(Op::Mul, left, expression(kMultiplicative));  // juxtaposition
 }
 
 Slot Parser::prefix() {
@@ -261,7 +267,7 @@ Slot Parser::name(const Token& token) {
     if (const FunctionInfo* function = find_function(text)) return call(token, *function);
     double value = 0.0;
     if (find_constant(text, value)) return builder_.constant(value);
-    if (is_variable_product(text)) return variable_product(text);
+    if (int axis = variable_axis(text); axis >= 0) return builder_.var(axis);
     if (lexer_.peek().kind == TokenKind::LeftParen && letter_count(text) > 1)
         fail(token, "unknown function " + quote(text));
     return parameter(token);
@@ -271,13 +277,6 @@ Slot Parser::parameter(const Token& token) {
     if (parameters_.insert(token.text).second && parameters_.size() > limits_.max_parameters)
         fail(token, "more than " + std::to_string(limits_.max_parameters) + " parameters");
     return builder_.param(token.text);
-}
-
-Slot Parser::variable_product(std::string_view name) {
-    Slot product = builder_.var(name[0] - 'x');
-    for (char axis : name.substr(1))
-        product = builder_.binary(Op::Mul, product, builder_.var(axis - 'x'));
-    return product;
 }
 
 Slot Parser::call(const Token& token, const FunctionInfo& function) {

@@ -83,6 +83,11 @@ TEST(CompileExpression, implicit_multiplication_reads_as_geogebra) {
     expect_same_tape("2cos(2x)", "2*cos(2*x)");
     expect_same_tape("xy", "x*y");
     expect_same_tape("xyz", "x*y*z");
+    expect_same_tape("xy^2", "x*y^2");
+    expect_same_tape("2xy²z", "2*x*y^2*z");
+    expect_same_tape("xx", "x^2");
+    // A letter other than x, y, z makes the whole word one parameter name.
+    EXPECT_EQ(compiled("xa + ya").params, (std::vector<std::string>{"xa", "ya"}));
     expect_same_tape("x y z", "x*y*z");
     expect_same_tape("(x+1)(x-1)", "(x+1)*(x-1)");
     expect_same_tape("2(x+1)", "2*(x+1)");
