@@ -1,0 +1,94 @@
+// Mesh deltas: what changed in a refined mesh since the last step, in terms of stable ids.
+//
+// Every triangle and vertex a refiner creates gets an id that is never given to another triangle or
+// vertex in the same session. A triangle id always denotes the same three vertex ids (a merge
+// brings a split triangle back under its old id); a vertex keeps its id while it moves (when the
+// function changes). Clients weld shared vertices by id.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "mesh/mesh.h"
+
+namespace isomesh {
+
+struct DeltaVertex {
+    std::uint32_t id = 0;
+    glm::dvec3 position{0.0};
+    glm::dvec3 normal{0.0};
+};
+
+struct DeltaTriangle {
+    std::uint32_t id = 0;
+    std::array<std::uint32_t, 3> vertices{};  // vertex ids, counter-clockwise seen from f > 0
+};
+
+/// Applied in member order: removals, then vertex additions and moves, then triangle additions.
+/// Each list is sorted by id and holds an id at most once; a delta never adds and removes the same
+/// id (such pairs cancel out when the delta is built).
+struct MeshDelta {
+    std::vector<std::uint32_t> removed_triangles;
+    std::vector<std::uint32_t> removed_vertices;  // no longer used by any triangle
+    std::vector<DeltaVertex> added_vertices;
+    std::vector<DeltaVertex> moved_vertices;  // new position and normal of an existing vertex
+    std::vector<DeltaTriangle> added_triangles;
+
+    bool empty() const {
+        return removed_triangles.empty() && removed_vertices.empty() && added_vertices.empty() &&
+               moved_vertices.empty() && added_triangles.empty();
+    }
+};
+
+/// Accumulates changes as they happen and produces the net delta.
+class DeltaBuilder {
+  public:
+    void add_vertex(const DeltaVertex& vertex);
+    void move_vertex(const DeltaVertex& vertex);
+    void remove_vertex(std::uint32_t id);
+    void add_triangle(const DeltaTriangle& triangle);
+    void remove_triangle(std::uint32_t id);
+    /// The net delta since construction or the last take(); resets the builder.
+    MeshDelta take();
+
+  private:
+    enum class Change : std::uint8_t { Added, Moved, Removed };
+    struct VertexChange {
+        Change change;
+        DeltaVertex vertex;
+    };
+    struct TriangleChange {
+        Change change;
+        DeltaTriangle triangle;
+    };
+    std::unordered_map<std::uint32_t, VertexChange> vertices_;
+    std::unordered_map<std::uint32_t, TriangleChange> triangles_;
+};
+
+/// A mesh keyed by ids, built by applying deltas in order (what a client holds).
+class DeltaMesh {
+  public:
+    /// Applies `delta`; on an inconsistency (removing an unknown id, adding a known one, a triangle
+    /// using an unknown vertex, removing a vertex still in use) returns a description and leaves
+    /// the mesh partly updated. Returns an empty string on success.
+    std::string apply(const MeshDelta& delta);
+
+    std::size_t vertex_count() const { return vertices_.size(); }
+    std::size_t triangle_count() const { return triangles_.size(); }
+    /// The mesh with vertices and triangles sorted by id (no neighbours).
+    Mesh to_mesh() const;
+    /// The triangle ids in increasing order (the order of to_mesh().triangles).
+    std::vector<std::uint32_t> triangle_ids() const;
+
+  private:
+    std::unordered_map<std::uint32_t, DeltaVertex> vertices_;
+    std::unordered_map<std::uint32_t, DeltaTriangle> triangles_;
+    std::unordered_map<std::uint32_t, std::uint32_t> uses_;  // vertex id -> triangles using it
+};
+
+}  // namespace isomesh

@@ -1,0 +1,155 @@
+// Phase 2: progressive refinement of a phase-1 mesh (the thesis, chapter 3.2 and 3.3.3: ROAM on
+// the dual graph of a Marching Cubes mesh), with the parts the thesis left out: merges, changing
+// constraints and changing functions.
+//
+// A Refiner owns one surface's refinement state and is used by one thread at a time (a server
+// runs many refiners on a worker pool). Each call to step() performs whole operations until its
+// budget is spent or there is nothing left to do, and returns the net change as a MeshDelta.
+//
+// Operations (see refiner.cpp for the algorithms and the papers):
+// - split: bisect a triangle's base edge at its midpoint projected onto the surface; the triangle
+//   across the base edge is bisected with it, after forced splits when its own base edge differs
+//   (ROAM's forced splits), so the mesh stays conforming: no T-junctions, watertight if it was.
+//   Base edges: the longest edge for phase-1 triangles (thesis 3.3.2); a child's base edge is the
+//   side it keeps from its parent (ROAM's bintree rule, newest vertex bisection), which makes the
+//   number of triangles a split creates known before it is made.
+// - merge: undo a split whose children are all unsplit; every phase-1 triangle is the root of its
+//   own tree of splits (the thesis's "multi-rooted tree", 3.2.3).
+// - refresh: after set_field, move every vertex onto the new surface and re-prioritise.
+// The split queue orders unsplit triangles by error, largest first; the merge queue orders
+// mergeable splits by the larger error of the triangles a merge restores, smallest first (ROAM's
+// dual queues). While the constraint wants refinement the best split that does not overshoot it is
+// made; while the mesh would still satisfy it after a merge (or is over a triangle budget) the
+// best merge is made; otherwise a split and a merge are exchanged while the split's priority
+// exceeds the merge's by settings.swap_ratio. The mesh is then optimal for the constraint in
+// ROAM's sense.
+//
+// Determinism: the operation sequence depends only on the input mesh, the function, the settings
+// and the sequence of calls (set_constraint, set_field), never on how operation-count budgets cut
+// it into steps. Time budgets are not deterministic by nature.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "eval/evaluator.h"
+#include "mesh/mesh.h"
+#include "refine/constraints.h"
+#include "refine/error_measures.h"
+#include "refine/mesh_delta.h"
+#include "refine/split_queue.h"
+#include "refine/surface_projection.h"
+
+namespace isomesh {
+
+struct RefineSettings {
+    /// The split priority; nullptr means epsilon4 (see error_measures.h for why).
+    std::shared_ptr<const ErrorMeasure> error_measure;
+    /// When to stop; can be changed later with set_constraint. The default never refines.
+    Constraint constraint;
+    QueueKind queue = QueueKind::Bucket;
+    BucketQueueSettings buckets;
+    ProjectionSettings projection;
+    /// A split and a merge are exchanged when the split's priority exceeds the merge's by this
+    /// factor (> 1; hysteresis against exchanging back and forth).
+    double swap_ratio = 2.0;
+    /// Triangles whose base edge is shorter than this are never split.
+    double min_edge_length = 1e-7;
+    /// A bound on forced splits per split (never reached on meshes whose base edges are longest
+    /// edges; a guard against malformed input).
+    std::size_t max_forced_chain = 4096;
+    /// Phase 1 for a new function (usually polygonize with the session's settings). When set,
+    /// set_field compares the topology of a fresh phase-1 mesh with the current mesh and restarts
+    /// from the fresh mesh when they differ, or when a vertex cannot be moved onto the new surface.
+    /// When empty, set_field only moves the existing vertices.
+    std::function<Mesh(const Field&)> phase1;
+    /// Checked between operations; step() returns early when it becomes true.
+    const std::atomic<bool>* cancel = nullptr;
+};
+
+struct StepBudget {
+    /// Operations: bisections (a forced chain is not cut: the last split may exceed the budget),
+    /// merges, and vertices or triangles refreshed after a function change.
+    std::size_t operations = 1024;
+    /// Wall-clock limit in microseconds; 0 means none. Not deterministic.
+    std::int64_t microseconds = 0;
+};
+
+struct StepResult {
+    MeshDelta delta;
+    std::size_t splits = 0;  // bisections, forced ones included
+    std::size_t merges = 0;
+    std::size_t refreshed = 0;  // vertices and triangles updated for a new function
+    bool restarted = false;     // the mesh was rebuilt from a fresh phase-1 mesh
+    bool converged = false;     // nothing left to do until the constraint or function changes
+    bool cancelled = false;
+};
+
+/// Counters over the refiner's life.
+struct RefineCounters {
+    std::size_t splits = 0;
+    std::size_t merges = 0;
+    std::size_t swaps = 0;
+    std::size_t refreshed_vertices = 0;
+    std::size_t refreshed_triangles = 0;
+    std::size_t failed_projections = 0;  // split vertices left at the edge midpoint
+    std::size_t failed_refreshes = 0;    // vertices that found no surface nearby after set_field
+    std::size_t restarts = 0;
+    std::size_t refused_splits = 0;  // chains longer than max_forced_chain
+};
+
+/// The current mesh in compact form, triangles and vertices sorted by id.
+struct RefinedMesh {
+    Mesh mesh;  // with neighbours and base_edge
+    std::vector<std::uint32_t> triangle_ids;
+    std::vector<std::uint32_t> vertex_ids;
+};
+
+/// Empty when `mesh` can be refined, else why not: indices out of range, non-finite positions,
+/// a triangle with a repeated vertex, an edge shared by three or more triangles, or two triangles
+/// disagreeing on orientation across an edge.
+std::string validate_refinable(const Mesh& mesh);
+
+class Refiner {
+  public:
+    /// Starts from `first_mesh` (phase 1's output; its neighbours and base_edge are recomputed).
+    /// Throws std::invalid_argument when validate_refinable fails or field is null.
+    /// The starting mesh is snapshot() right after construction.
+    Refiner(std::shared_ptr<const Field> field, const Mesh& first_mesh, RefineSettings settings);
+    /// Runs settings.phase1 on the field for the first mesh. Throws std::invalid_argument when
+    /// settings.phase1 is empty.
+    Refiner(std::shared_ptr<const Field> field, RefineSettings settings);
+    ~Refiner();
+    Refiner(const Refiner&) = delete;
+    Refiner& operator=(const Refiner&) = delete;
+
+    StepResult step(const StepBudget& budget);
+    /// Steps until converged or cancelled (`operations_per_step` operations at a time); returns
+    /// the merged delta.
+    StepResult run_to_convergence(std::size_t operations_per_step = 4096);
+
+    void set_constraint(Constraint constraint);
+    const Constraint& constraint() const;
+
+    /// A new version of the function (new parameter values or a new tape). Vertices move onto the
+    /// new surface during the following steps, coarse before fine; then the queues re-converge.
+    /// With settings.phase1, a change of topology restarts from a fresh phase-1 mesh (the next
+    /// step's delta removes every triangle and adds the new mesh). Throws on a null field.
+    void set_field(std::shared_ptr<const Field> field);
+    std::uint64_t version() const;
+
+    MeshStats stats() const;
+    const RefineCounters& counters() const;
+    RefinedMesh mesh() const;
+    /// The delta that builds the current mesh from nothing.
+    MeshDelta snapshot() const;
+
+  private:
+    class Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace isomesh

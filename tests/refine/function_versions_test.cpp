@@ -1,0 +1,173 @@
+// Function versions (set_field): the refined mesh follows a changing function.
+#include <cmath>
+
+#include <gtest/gtest.h>
+#include <glm/geometric.hpp>
+
+#include "fixtures.h"
+#include "mesh/topology.h"
+#include "refine/refiner.h"
+
+namespace isomesh {
+namespace {
+
+std::shared_ptr<const Field> sphere_a(double a) {
+    return test::make_quadric_field({1, 1, 1}, a);
+}
+
+RefineSettings sphere_settings(std::size_t budget) {
+    RefineSettings s;
+    s.constraint = Constraint::triangle_budget(budget);
+    s.phase1 = [](const Field& f) { return test::cube_sphere_mesh(f, 3); };
+    return s;
+}
+
+double max_distance_to_sphere(const Mesh& mesh, double radius) {
+    double worst = 0.0;
+    for (const glm::dvec3& p : mesh.positions)
+        worst = std::max(worst, std::abs(glm::length(p) - radius));
+    return worst;
+}
+
+TEST(RefinerVersions, fifty_parameter_changes_end_like_a_fresh_mesh) {
+    const RefineSettings settings = sphere_settings(3000);
+    Refiner refiner(sphere_a(1.0), settings);
+    refiner.run_to_convergence();
+    std::vector<MeshDelta> deltas;
+    const MeshDelta start = refiner.snapshot();
+    for (int i = 1; i <= 50; ++i) {
+        const double a = 1.0 + 19.0 * i / 50.0;
+        refiner.set_field(sphere_a(a));
+        // A slider moves faster than the mesh converges: only part of the work between changes.
+        deltas.push_back(refiner.step({1500, 0}).delta);
+        EXPECT_EQ(test::check_conforming(refiner.mesh().mesh), "") << "a = " << a;
+    }
+    deltas.push_back(refiner.run_to_convergence().delta);
+    EXPECT_EQ(refiner.version(), 51u);
+    EXPECT_EQ(refiner.counters().restarts, 0u);
+
+    Refiner fresh(sphere_a(20.0), settings);
+    fresh.run_to_convergence();
+
+    const RefinedMesh changed = refiner.mesh();
+    const RefinedMesh reference = fresh.mesh();
+    const TopologyReport t1 = analyze_topology(changed.mesh), t2 = analyze_topology(reference.mesh);
+    EXPECT_EQ(t1.components, t2.components);
+    EXPECT_EQ(t1.euler_characteristic, t2.euler_characteristic);
+    EXPECT_TRUE(t1.watertight());
+    EXPECT_NEAR(double(changed.mesh.triangles.size()), double(reference.mesh.triangles.size()),
+                1.0);
+    // Every vertex is on the new sphere.
+    EXPECT_LT(max_distance_to_sphere(changed.mesh, std::sqrt(20.0)), 1e-8);
+
+    auto e1 = sphere_a(20.0)->make_evaluator();
+    const MeshErrorReport r1 = measure_mesh_error(changed.mesh, *e1);
+    const MeshErrorReport r2 = measure_mesh_error(reference.mesh, *e1);
+    std::printf("after 50 changes: eps4 total %.5f max distance %.5f; fresh: %.5f %.5f\n",
+                r1.epsilon4_total, r1.max_distance, r2.epsilon4_total, r2.max_distance);
+    EXPECT_NEAR(r1.epsilon4_total, r2.epsilon4_total, 0.1 * r2.epsilon4_total);
+    EXPECT_NEAR(r1.max_distance, r2.max_distance, 0.25 * r2.max_distance);
+    EXPECT_NEAR(refiner.stats().total_error, r1.epsilon4_total, 0.1 * r1.epsilon4_total);
+
+    // The client's copy, updated by deltas only, ends identical.
+    std::string error;
+    const Mesh replayed = test::replay_mesh(start, deltas, &error);
+    EXPECT_EQ(error, "");
+    EXPECT_TRUE(test::same_mesh(replayed, test::canonical(changed)));
+}
+
+// Moving vertices along a changed function is all a new version needs when the change is small.
+TEST(RefinerVersions, a_small_change_moves_vertices_without_restarting) {
+    Refiner refiner(sphere_a(4.0), sphere_settings(2000));
+    refiner.run_to_convergence();
+    const RefinedMesh before = refiner.mesh();
+    refiner.set_field(sphere_a(4.2));
+    const StepResult r = refiner.run_to_convergence();
+    EXPECT_FALSE(r.restarted);
+    EXPECT_EQ(
+        r.delta.moved_vertices.size() + r.delta.added_vertices.size() >= before.vertex_ids.size(),
+        true);
+    EXPECT_LT(max_distance_to_sphere(refiner.mesh().mesh, std::sqrt(4.2)), 1e-8);
+    EXPECT_EQ(refiner.counters().refreshed_vertices, before.vertex_ids.size());
+}
+
+// Two spheres that merge into one: the topology of the phase-1 mesh changes, so the refiner starts
+// again from it.
+Mesh translated(Mesh mesh, const glm::dvec3& offset) {
+    for (auto& p : mesh.positions) p += offset;
+    return mesh;
+}
+
+Mesh joined(const Mesh& a, const Mesh& b) {
+    Mesh m = a;
+    const auto offset = static_cast<std::uint32_t>(a.positions.size());
+    m.positions.insert(m.positions.end(), b.positions.begin(), b.positions.end());
+    m.normals.insert(m.normals.end(), b.normals.begin(), b.normals.end());
+    for (auto t : b.triangles) m.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    return m;
+}
+
+std::shared_ptr<const Field> two_spheres(double d) {
+    auto dist = [d](const glm::dvec3& p) {
+        return std::min(glm::length(p - glm::dvec3(d, 0, 0)),
+                        glm::length(p + glm::dvec3(d, 0, 0))) -
+               1.0;
+    };
+    return test::make_analytic_field(
+        {dist, [d](const glm::dvec3& p) {
+             const glm::dvec3 a = p - glm::dvec3(d, 0, 0), b = p + glm::dvec3(d, 0, 0);
+             return glm::length(a) < glm::length(b) ? glm::normalize(a) : glm::normalize(b);
+         }});
+}
+
+TEST(RefinerVersions, a_topology_change_restarts_from_phase_one) {
+    // The fixture's phase 1 knows the two shapes: apart (d > 1), or one star-shaped blob.
+    RefineSettings s;
+    s.constraint = Constraint::triangle_budget(1500);
+    double current_d = 3.0;
+    s.phase1 = [&current_d](const Field& f) {
+        if (current_d <= 1.0) return test::cube_sphere_mesh(f, 3);
+        auto unit = test::make_sphere_field({0, 0, 0}, 1.0);
+        const Mesh ball = test::cube_sphere_mesh(*unit, 3);
+        (void)f;
+        return joined(translated(ball, {current_d, 0, 0}), translated(ball, {-current_d, 0, 0}));
+    };
+    Refiner refiner(two_spheres(current_d), s);
+    refiner.run_to_convergence();
+    EXPECT_EQ(analyze_topology(refiner.mesh().mesh).components, 2u);
+    const MeshDelta start = refiner.snapshot();
+
+    current_d = 0.5;
+    refiner.set_field(two_spheres(current_d));
+    const StepResult r = refiner.run_to_convergence();
+    EXPECT_TRUE(r.restarted);
+    EXPECT_EQ(refiner.counters().restarts, 1u);
+    const RefinedMesh m = refiner.mesh();
+    const TopologyReport report = analyze_topology(m.mesh);
+    EXPECT_EQ(report.components, 1u);
+    EXPECT_EQ(report.euler_characteristic, 2);
+    EXPECT_TRUE(report.watertight());
+    EXPECT_GE(m.mesh.triangles.size(), 1499u);
+    // Ids of the new mesh continue after the old ones, and the delta replaces everything.
+    std::string error;
+    EXPECT_TRUE(test::same_mesh(test::replay_mesh(start, {r.delta}, &error), test::canonical(m)));
+    EXPECT_EQ(error, "");
+    EXPECT_GT(m.triangle_ids.front(), start.added_triangles.back().id);
+}
+
+// Without phase 1 the refiner can only move vertices; they stay put where no surface is near.
+TEST(RefinerVersions, without_phase_one_vertices_only_move) {
+    RefineSettings s;
+    s.constraint = Constraint::triangle_budget(500);
+    auto field = sphere_a(1.0);
+    Refiner refiner(field, test::cube_sphere_mesh(*field, 2), s);
+    refiner.run_to_convergence();
+    refiner.set_field(sphere_a(100.0));  // radius 10: far beyond the vertices' reach
+    refiner.run_to_convergence();
+    EXPECT_GT(refiner.counters().failed_refreshes, 0u);
+    EXPECT_EQ(refiner.counters().restarts, 0u);
+    EXPECT_EQ(test::check_conforming(refiner.mesh().mesh), "");
+}
+
+}  // namespace
+}  // namespace isomesh
