@@ -2,7 +2,6 @@
 #include "mesh/topology.h"
 
 #include <algorithm>
-#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -23,8 +22,9 @@ struct HalfEdge {
 
 class DisjointSets {
   public:
-    explicit DisjointSets(std::size_t n) : parent_(n) {
-        std::iota(parent_.begin(), parent_.end(), std::size_t{0});
+    explicit DisjointSets(std::size_t n) {
+        parent_.reserve(n);  // (push_back: GCC 12 misreads a sized constructor + iota at -O3)
+        for (std::size_t i = 0; i < n; ++i) parent_.push_back(i);
     }
     std::size_t find(std::size_t i) {
         while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
