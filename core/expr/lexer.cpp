@@ -193,7 +193,7 @@ Token Lexer::scan_identifier(Token token, char32_t first, std::size_t first_leng
     std::size_t start = pos_;
     token.kind = TokenKind::Identifier;
     std::size_t end = pos_ + first_length;
-    bool alone = first == kPi || first == kInfinity;
+    bool alone = first == kPi || first == kInfinity || pos_ < split_until_;
     while (!alone && end < source_.size()) {
         CodePoint c = decode_utf8(source_, end);
         if (c.length == 0 || !is_identifier_part(c.value)) break;
@@ -202,7 +202,10 @@ Token Lexer::scan_identifier(Token token, char32_t first, std::size_t first_leng
     // A name made only of x, y and z is their product: each letter is a token of its own, so
     // `xy^2` reads as `x y^2`, as GeoGebra reads it.
     std::string_view name = source_.substr(start, end - start);
-    if (name.find_first_not_of("xyz") == std::string_view::npos) end = start + 1;
+    if (!alone && name.find_first_not_of("xyz") == std::string_view::npos) {
+        split_until_ = end;
+        end = start + 1;
+    }
     while (pos_ < end) advance(decode_utf8(source_, pos_).length);
     return finish(token, start);
 }

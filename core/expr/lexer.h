@@ -67,6 +67,7 @@ class Lexer {
     std::size_t pos_ = 0;
     int line_ = 1;
     int column_ = 1;
+    std::size_t split_until_ = 0;  // end of the x/y/z-only name being read letter by letter
     bool multiline_ = false;
     Token current_;
 };
