@@ -6,4 +6,6 @@ cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 bash scripts/build.sh -DISOMESH_BUILD_TESTS=ON -DISOMESH_BUILD_BENCH=ON
 ctest --test-dir build --output-on-failure -j "$(nproc)" --timeout 600
+# The protocol's Node check: draco3d decodes frames and Ajv validates messages made by the C++ side.
+(cd tests/protocol/node && npm ci --no-audit --no-fund && node --test)
 bash scripts/fuzz.sh
