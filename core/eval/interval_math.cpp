@@ -163,9 +163,10 @@ Interval log_range(Op op, const Interval& a, Effects& e) {
     return widen(increasing(op, d), Zero::Exact);
 }
 
-/// The four products or quotients of the endpoints, whose hull bounds a monotone-in-each-operand
-/// operation. A NaN corner (0 * inf, inf / inf) is undefined there, but the values around it are
-/// covered by the other corners, except 0 * y for the finite y of a non-degenerate y interval.
+/// The four products or quotients of the endpoints, whose hull bounds an operation monotone in
+/// each operand. A NaN corner (0 * inf, inf / inf) is undefined itself; of the values around it,
+/// the infinite ones are other corners, but the zeros (0 * finite y, finite x / inf) are not and
+/// are added when the interval holding the finite values is not a single point.
 Interval corners(Op op, const Interval& a, const Interval& b, Effects& e) {
     Interval r = Interval::empty();
     for (double x : {a.lo, a.hi}) {
@@ -173,14 +174,25 @@ Interval corners(Op op, const Interval& a, const Interval& b, Effects& e) {
             double v = apply_binary(op, x, y);
             if (std::isnan(v)) {
                 e.undefined = true;
-                bool finite_neighbours = std::isinf(x) ? a.lo != a.hi : b.lo != b.hi;
-                if (op != Op::Mul || !finite_neighbours) continue;
+                const Interval& finite_side = op == Op::Div || std::isinf(x) ? a : b;
+                if (finite_side.lo == finite_side.hi) continue;
                 v = 0.0;
             }
             r = hull(r, {v, v});
         }
     }
     return r;
+}
+
+bool has_infinite_end(const Interval& a) {
+    return std::isinf(a.lo) || std::isinf(a.hi);
+}
+
+Interval multiply_range(const Interval& a, const Interval& b, Effects& e) {
+    // 0 * inf is NaN, also for a zero inside an interval (not only at a corner).
+    if ((a.contains(0.0) && has_infinite_end(b)) || (b.contains(0.0) && has_infinite_end(a)))
+        e.undefined = true;
+    return corners(Op::Mul, a, b, e);
 }
 
 Interval add_range(const Interval& a, const Interval& b, Effects& e) {
@@ -198,9 +210,8 @@ Interval divide_range(const Interval& a, const Interval& b, Effects& e) {
     if (b.contains(0.0)) {
         // A pole. The sign of a zero divisor (+0 or -0) is unknown, so both infinities may occur.
         e.discontinuous = true;
-        if (a.contains(0.0)) e.undefined = true;  // 0/0
-        if ((std::isinf(a.lo) || std::isinf(a.hi)) && (std::isinf(b.lo) || std::isinf(b.hi)))
-            e.undefined = true;  // inf/inf
+        if (a.contains(0.0)) e.undefined = true;                             // 0/0
+        if (has_infinite_end(a) && has_infinite_end(b)) e.undefined = true;  // inf/inf
         return Interval::entire();
     }
     return corners(Op::Div, a, b, e);
@@ -273,6 +284,7 @@ IntervalValue pow_interval(const IntervalValue& base, const IntervalValue& expon
                     e.discontinuous = true;
                     r = hull(r, {-p.hi, p.hi});
                 }
+                if (x.lo == -kInf) r = hull(r, pow_corners({kInf, kInf}, y));  // pow(-inf, y)
             }
         }
     }
@@ -351,7 +363,7 @@ Interval binary_range(Op op, const Interval& a, const Interval& b, Effects& e) {
         case Op::Sub:
             return sub_range(a, b, e);
         case Op::Mul:
-            return corners(Op::Mul, a, b, e);
+            return multiply_range(a, b, e);
         case Op::Div:
             return divide_range(a, b, e);
         case Op::Atan2:
