@@ -56,7 +56,7 @@ struct PointBatch {
 };
 
 class Evaluator {
-  public:
+public:
     virtual ~Evaluator() = default;
 
     /// f(p). NaN where f is undefined (ln of a negative number, 0/0, outside a grid...).
@@ -86,7 +86,7 @@ class Evaluator {
 };
 
 class Field {
-  public:
+public:
     virtual ~Field() = default;
     /// A new evaluator for the calling thread. Thread-safe.
     virtual std::unique_ptr<Evaluator> make_evaluator() const = 0;
