@@ -1,0 +1,385 @@
+// The isomesh client: one WebSocket connection holding any number of sessions (PROTOCOL.md).
+//
+// Requests get an integer "id" and a Promise settled by the reply that echoes it (`created`,
+// `updated`, `subscribed`, `ack`, `pong`, or `error`, which rejects with an IsomeshError). Binary
+// frames are decoded and applied to their session's SessionMesh; a sequence gap or a frame that
+// cannot be applied makes the session send `resync`, and the server answers with a keyframe.
+//
+// The WebSocket is injectable: the browser's, or the `ws` package's in Node (both offer the same
+// onopen/onmessage/onclose/send API). Nothing here touches the DOM.
+
+import { IsomeshError } from './errors.js';
+import { Emitter } from './events.js';
+import { decodeFrame, readFrameHeader } from './frame.js';
+import { SessionMesh, Outcome } from './mesh.js';
+import {
+  REPLY_TYPES,
+  errorFromReply,
+  functionFields,
+  parseServerMessage,
+  requestText,
+  sessionState,
+} from './messages.js';
+
+const now = () => globalThis.performance.now();
+
+function utf8Length(text) {
+  let bytes = text.length;
+  for (let i = 0; i < text.length; ++i) {
+    const c = text.charCodeAt(i);
+    if (c >= 0x80) bytes += c >= 0x800 && (c < 0xd800 || c > 0xdfff) ? 2 : 1;
+  }
+  return bytes;
+}
+
+/**
+ * Opens a connection and resolves once it is open.
+ * @param {string} url e.g. 'ws://127.0.0.1:8080/ws'
+ * @param {object} options
+ * @param {{decode(bytes: Uint8Array): object}} options.decoder a DracoMeshDecoder (see
+ *   loadDracoDecoder)
+ * @param {Function} [options.WebSocket] a WebSocket constructor; default globalThis.WebSocket
+ * @param {number} [options.requestTimeoutMs] reject a request whose reply takes longer (30000)
+ * @param {boolean} [options.autoResync] send `resync` on a sequence gap (true)
+ * @param {number} [options.initialCapacity] triangles each session's slot table starts with
+ * @returns {Promise<IsomeshClient>}
+ */
+export function connect(url, options = {}) {
+  const WebSocketImpl = options.WebSocket ?? globalThis.WebSocket;
+  if (typeof WebSocketImpl !== 'function') {
+    return Promise.reject(new TypeError('no WebSocket here: pass options.WebSocket (in Node, the ws package)'));
+  }
+  if (!options.decoder || typeof options.decoder.decode !== 'function') {
+    return Promise.reject(new TypeError('pass options.decoder: await loadDracoDecoder()'));
+  }
+  const client = new IsomeshClient(new WebSocketImpl(url), options);
+  return client.opened.then(() => client);
+}
+
+export class IsomeshClient extends Emitter {
+  /** Use connect(). */
+  constructor(socket, options) {
+    super();
+    this.socket = socket;
+    this.decoder = options.decoder;
+    this.options = { requestTimeoutMs: 30000, autoResync: true, ...options };
+    /** Session id (hex) -> Session, for every session this connection receives. */
+    this.sessions = new Map();
+    this.bytesReceived = 0;
+    this.framesReceived = 0;
+    this.messagesReceived = 0;
+    this.closed = false;
+    this.pending = new Map();
+    this.nextRequestId = 1;
+    socket.binaryType = 'arraybuffer';
+    this.opened = new Promise((resolve, reject) => {
+      socket.onopen = () => resolve();
+      socket.onerror = () => reject(new IsomeshError('unavailable', 'WebSocket connection failed'));
+    });
+    socket.onmessage = (event) => this.#receive(event.data);
+    socket.onclose = (event) => this.#closed(event);
+  }
+
+  /**
+   * Creates a session: {expression | vm, parameters, box, constraints}. Resolves with the Session
+   * once `created` arrives; its keyframe and deltas follow as events.
+   */
+  async create(options) {
+    const fields = functionFields(options);
+    const startedAt = now();
+    const reply = await this.request('create', fields);
+    const session = this.#adopt(reply, startedAt);
+    return session;
+  }
+
+  /** Subscribes to an existing session (by its hex id); a keyframe follows the reply. */
+  async subscribe(sessionId) {
+    const known = this.sessions.get(sessionId);
+    if (known) return known;
+    const startedAt = now();
+    const reply = await this.request('subscribe', { session: sessionId });
+    return this.#adopt(reply, startedAt);
+  }
+
+  /** Round trip: resolves with {rttMs, serverTimeUs}. */
+  async ping() {
+    const startedAt = now();
+    const reply = await this.request('ping');
+    return { rttMs: now() - startedAt, serverTimeUs: reply.time_us };
+  }
+
+  /**
+   * Sends a request and resolves with its reply (rejects with an IsomeshError on an `error`
+   * reply, a timeout or a closed connection). The building block of every method here.
+   */
+  request(type, fields = {}) {
+    if (this.closed) return Promise.reject(new IsomeshError('closed', 'the connection is closed'));
+    const id = this.nextRequestId++;
+    const text = requestText(type, id, fields);
+    return new Promise((resolve, reject) => {
+      const timer = setTimeout(() => {
+        this.pending.delete(id);
+        reject(new IsomeshError('timeout', `no reply to ${type} within ${this.options.requestTimeoutMs} ms`));
+      }, this.options.requestTimeoutMs);
+      timer.unref?.(); // Node: a pending request alone does not keep the process alive
+      this.pending.set(id, { resolve, reject, timer });
+      this.socket.send(text);
+    });
+  }
+
+  /** Sends a message that expects no reply (e.g. resync). */
+  send(type, fields = {}) {
+    if (!this.closed) this.socket.send(requestText(type, undefined, fields));
+  }
+
+  /** Closes the connection (sessions it created expire on the server unless others subscribe). */
+  close() {
+    this.socket.close(1000, 'client closed');
+  }
+
+  #adopt(reply, startedAt) {
+    let session = this.sessions.get(reply.session);
+    if (!session) {
+      session = new Session(this, reply.session, { initialCapacity: this.options.initialCapacity });
+      this.sessions.set(reply.session, session);
+    }
+    session._setState(sessionState(reply), startedAt);
+    return session;
+  }
+
+  #receive(data) {
+    if (typeof data === 'string') {
+      this.#receiveText(data);
+    } else {
+      this.#receiveFrame(data instanceof ArrayBuffer ? new Uint8Array(data) : new Uint8Array(data.buffer, data.byteOffset, data.byteLength));
+    }
+  }
+
+  #receiveText(text) {
+    this.bytesReceived += utf8Length(text);
+    ++this.messagesReceived;
+    let message;
+    try {
+      message = parseServerMessage(text);
+    } catch (error) {
+      this.emit('error', error);
+      return;
+    }
+    this.emit('message', message);
+    if (REPLY_TYPES.has(message.type) && message.id !== undefined && this.pending.has(message.id)) {
+      const { resolve, reject, timer } = this.pending.get(message.id);
+      this.pending.delete(message.id);
+      clearTimeout(timer);
+      if (message.type === 'error') reject(errorFromReply(message));
+      else resolve(message);
+      return;
+    }
+    const session = message.session !== undefined ? this.sessions.get(message.session) : undefined;
+    if (session) {
+      session._onMessage(message);
+      if (message.type === 'closed') this.sessions.delete(message.session);
+    } else if (message.type === 'error') {
+      this.emit('error', errorFromReply(message));
+    }
+  }
+
+  #receiveFrame(bytes) {
+    this.bytesReceived += bytes.length;
+    ++this.framesReceived;
+    let frame;
+    try {
+      frame = decodeFrame(bytes, this.decoder);
+    } catch (error) {
+      this.#badFrame(bytes, error);
+      return;
+    }
+    this.sessions.get(frame.header.session)?._onFrame(frame, bytes.length);
+  }
+
+  /** A frame that does not decode: the session it names, if any, has lost a step. */
+  #badFrame(bytes, error) {
+    let session;
+    try {
+      session = this.sessions.get(readFrameHeader(bytes).session);
+    } catch {
+      session = undefined;
+    }
+    if (session) session._onBadFrame(error);
+    else this.emit('error', error);
+  }
+
+  #closed(event) {
+    this.closed = true;
+    const error = new IsomeshError('closed', `connection closed (${event.code}${event.reason ? `: ${event.reason}` : ''})`);
+    for (const { reject, timer } of this.pending.values()) {
+      clearTimeout(timer);
+      reject(error);
+    }
+    this.pending.clear();
+    this.emit('close', { code: event.code, reason: event.reason });
+  }
+}
+
+/**
+ * One session as this connection sees it: its settings, its mesh (ready to render), statistics,
+ * and events:
+ *   'state'      (state)             after created/updated/subscribed: version, parameters, box...
+ *   'keyframe'   (frame)             a keyframe was applied (the whole mesh was replaced)
+ *   'delta'      (frame)             a delta was applied
+ *   'firstMesh'  ({version, ms})     the first frame of a function version, ms after its request
+ *   'progress'   (message)           refinement statistics
+ *   'converged'  (message)           the constraints are met for message.version
+ *   'resync'     ({reason})          a gap or a bad frame: a keyframe was asked for
+ *   'error'      (IsomeshError)      an error about this session that answers no request
+ *   'closed'     (message)           the session ended (message.reason)
+ */
+export class Session extends Emitter {
+  constructor(client, id, meshOptions) {
+    super();
+    this.client = client;
+    this.id = id;
+    this.mesh = new SessionMesh(meshOptions);
+    this.state = null;
+    this.lastProgress = null;
+    this.lastConverged = null;
+    this.closed = false;
+    this.stats = { bytes: 0, frames: 0, keyframes: 0, deltas: 0, resyncs: 0, firstMeshMs: null, lastFrameAt: null };
+    this.pendingUpdates = 0;
+    this.resyncPending = false;
+    this.versionStart = null; // {startedAt, version} of the last request awaiting its first mesh
+  }
+
+  /** True when the mesh on hand is final for the latest function version. */
+  get converged() {
+    return (
+      this.pendingUpdates === 0 &&
+      this.state !== null &&
+      this.lastConverged !== null &&
+      this.lastConverged.version === this.state.version &&
+      this.mesh.synchronized &&
+      this.mesh.sequence >= this.lastConverged.sequence
+    );
+  }
+
+  /**
+   * A new function version: any of {expression | vm, parameters (merged), box, constraints (field
+   * by field)}. Resolves with the new state; rejects with IsomeshError (e.g. code
+   * 'bad_expression' with a column) and then the session keeps its previous version.
+   */
+  async update(options) {
+    const fields = functionFields(options);
+    const startedAt = now();
+    ++this.pendingUpdates;
+    try {
+      const reply = await this.client.request('update', { session: this.id, ...fields });
+      this._setState(sessionState(reply), startedAt);
+      return this.state;
+    } finally {
+      --this.pendingUpdates;
+    }
+  }
+
+  pause() {
+    return this.#ack('pause');
+  }
+
+  resume() {
+    return this.#ack('resume');
+  }
+
+  /** Stops receiving this session's frames on this connection (the session lives on). */
+  async unsubscribe() {
+    await this.#ack('unsubscribe');
+    this.client.sessions.delete(this.id);
+  }
+
+  /** Ends the session for every subscriber. */
+  async close() {
+    await this.#ack('close');
+    this.closed = true;
+    this.client.sessions.delete(this.id);
+  }
+
+  /** Asks for a fresh keyframe (done automatically on a sequence gap). */
+  resync() {
+    this.resyncPending = true;
+    ++this.stats.resyncs;
+    return this.#ack('resync');
+  }
+
+  #ack(type) {
+    return this.client.request(type, { session: this.id });
+  }
+
+  _setState(state, startedAt) {
+    this.state = state;
+    if (this.mesh.functionVersion >= state.version && this.stats.lastFrameAt !== null) {
+      this.#firstMesh(state.version, this.stats.lastFrameAt - startedAt);
+    } else {
+      this.versionStart = { startedAt, version: state.version };
+    }
+    this.emit('state', state);
+  }
+
+  _onFrame(frame, byteLength) {
+    const at = now();
+    const h = frame.header;
+    this.stats.bytes += byteLength;
+    ++this.stats.frames;
+    const outcome = this.mesh.apply(frame);
+    if (outcome === Outcome.applied) {
+      this.stats.lastFrameAt = at;
+      if (h.kind === 'keyframe') {
+        ++this.stats.keyframes;
+        this.resyncPending = false;
+      } else {
+        ++this.stats.deltas;
+      }
+      this.emit(h.kind, frame);
+      const start = this.versionStart;
+      if (start && h.functionVersion >= start.version) this.#firstMesh(h.functionVersion, at - start.startedAt);
+    } else if (outcome === Outcome.gap || outcome === Outcome.inconsistent) {
+      this.#lostStep(outcome);
+    }
+  }
+
+  _onBadFrame(error) {
+    this.mesh.synchronized = false;
+    this.emit('error', error);
+    this.#lostStep('bad_frame');
+  }
+
+  _onMessage(message) {
+    switch (message.type) {
+      case 'progress':
+        this.lastProgress = message;
+        this.emit('progress', message);
+        break;
+      case 'converged':
+        this.lastConverged = message;
+        this.emit('converged', message);
+        break;
+      case 'closed':
+        this.closed = true;
+        this.emit('closed', message);
+        break;
+      case 'error':
+        this.emit('error', errorFromReply(message));
+        break;
+      default:
+        break;
+    }
+  }
+
+  #firstMesh(version, ms) {
+    this.versionStart = null;
+    this.stats.firstMeshMs = ms;
+    this.emit('firstMesh', { version, ms });
+  }
+
+  #lostStep(reason) {
+    if (!this.client.options.autoResync || this.resyncPending || this.closed) return;
+    this.emit('resync', { reason });
+    this.resync().catch((error) => this.emit('error', error));
+  }
+}

@@ -1,0 +1,180 @@
+// The client's request/reply matching, events and gap handling, against an in-process fake
+// WebSocket playing the server (frames with stand-in payloads, see support.js).
+
+import assert from 'node:assert/strict';
+import { test } from 'node:test';
+
+import { connect } from '../src/client.js';
+import { FakeMeshDecoder, SESSION, buildFrame, vertex } from './support.js';
+
+class FakeSocket {
+  static last = null;
+
+  constructor(url) {
+    this.url = url;
+    this.sent = [];
+    this.binaryType = 'blob';
+    FakeSocket.last = this;
+    queueMicrotask(() => this.onopen?.());
+  }
+
+  send(text) {
+    this.sent.push(JSON.parse(text));
+  }
+
+  close(code = 1000, reason = '') {
+    queueMicrotask(() => this.onclose?.({ code, reason }));
+  }
+
+  /** The server's side. */
+  reply(message) {
+    this.onmessage({ data: JSON.stringify({ v: 1, ...message }) });
+  }
+
+  frame(options) {
+    const bytes = buildFrame(options);
+    this.onmessage({ data: bytes.buffer });
+  }
+
+  lastSent() {
+    return this.sent[this.sent.length - 1];
+  }
+}
+
+const state = { version: 1, expression: 'x^2+y^2+z^2=a', parameters: { a: 1 }, box: [-2, 2, -2, 2, -2, 2], constraints: { triangles: 100, max_error: 0, error_measure: 'epsilon4' } };
+const square = { vertices: [1, 2, 3, 4].map((id) => vertex(id)), triangles: [[1, 2, 3], [1, 3, 4]] };
+
+async function connected() {
+  const client = await connect('ws://127.0.0.1:1/ws', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder() });
+  return { client, socket: FakeSocket.last };
+}
+
+async function created(client, socket) {
+  const pending = client.create({ expression: 'x^2+y^2+z^2=a', parameters: { a: 1 }, box: state.box });
+  const request = socket.lastSent();
+  socket.reply({ type: 'created', id: request.id, session: SESSION, ...state });
+  return pending;
+}
+
+test('connect needs a WebSocket and a decoder', async () => {
+  await assert.rejects(connect('ws://x', { WebSocket: FakeSocket }), /decoder/);
+  await assert.rejects(connect('ws://x', { WebSocket: null, decoder: new FakeMeshDecoder() }), /WebSocket/);
+});
+
+test('create sends a versioned request and resolves with the session on its reply', async () => {
+  const { client, socket } = await connected();
+  assert.equal(socket.binaryType, 'arraybuffer');
+  const session = await created(client, socket);
+  assert.deepEqual(socket.sent[0], { v: 1, type: 'create', id: 1, expression: 'x^2+y^2+z^2=a', parameters: { a: 1 }, box: state.box });
+  assert.equal(session.id, SESSION);
+  assert.deepEqual(session.state.parameters, { a: 1 });
+  assert.equal(client.sessions.get(SESSION), session);
+});
+
+test('frames reach their session: keyframe and delta events, first mesh time, converged', async () => {
+  const { client, socket } = await connected();
+  const session = await created(client, socket);
+  const events = [];
+  for (const name of ['keyframe', 'delta', 'firstMesh', 'progress', 'converged']) session.on(name, () => events.push(name));
+  socket.frame({ kind: 'keyframe', sequence: 0, triangleIds: [1, 2], mesh: square });
+  socket.frame({ sequence: 1, removed: [2] });
+  socket.reply({ type: 'progress', session: SESSION, version: 1, sequence: 1, triangles: 1, error_max: 0.5, error_total: 1, splits_per_second: 10 });
+  assert.equal(session.converged, false);
+  socket.reply({ type: 'converged', session: SESSION, version: 1, sequence: 1, triangles: 1, error_max: 0, error_total: 0, splits: 0, merges: 0, first_mesh_ms: 1, total_ms: 2 });
+  assert.deepEqual(events, ['keyframe', 'firstMesh', 'delta', 'progress', 'converged']);
+  assert.equal(session.mesh.triangleCount, 1);
+  assert.equal(session.converged, true);
+  assert.ok(session.stats.firstMeshMs >= 0);
+  assert.equal(session.stats.frames, 2);
+  assert.ok(client.bytesReceived > 0);
+});
+
+test('an error reply rejects the request with its code and column; the session keeps its state', async () => {
+  const { client, socket } = await connected();
+  const session = await created(client, socket);
+  const pending = session.update({ expression: 'x^2+(y' });
+  assert.equal(session.converged, false, 'an update is in flight');
+  socket.reply({ type: 'error', id: socket.lastSent().id, session: SESSION, code: 'bad_expression', message: 'expected ) at column 7', column: 7 });
+  await assert.rejects(pending, (e) => e.code === 'bad_expression' && e.column === 7 && /column 7/.test(e.message));
+  assert.equal(session.state.version, 1);
+});
+
+test('update merges into the state the reply reports', async () => {
+  const { client, socket } = await connected();
+  const session = await created(client, socket);
+  const pending = session.update({ parameters: { a: 2 } });
+  assert.deepEqual(socket.lastSent(), { v: 1, type: 'update', id: 2, session: SESSION, parameters: { a: 2 } });
+  socket.reply({ type: 'updated', id: 2, session: SESSION, ...state, version: 2, parameters: { a: 2 } });
+  assert.deepEqual((await pending).parameters, { a: 2 });
+  assert.equal(session.state.version, 2);
+});
+
+test('a sequence gap sends one resync; the next keyframe restores the mesh', async () => {
+  const { client, socket } = await connected();
+  const session = await created(client, socket);
+  const resyncs = [];
+  session.on('resync', (e) => resyncs.push(e.reason));
+  socket.frame({ kind: 'keyframe', sequence: 0, triangleIds: [1, 2], mesh: square });
+  socket.frame({ sequence: 2, removed: [2] });
+  socket.frame({ sequence: 3, removed: [1] });
+  assert.deepEqual(resyncs, ['gap']);
+  const resync = socket.sent.filter((m) => m.type === 'resync');
+  assert.equal(resync.length, 1);
+  assert.equal(resync[0].session, SESSION);
+  socket.reply({ type: 'ack', id: resync[0].id, request: 'resync', session: SESSION });
+  socket.frame({ kind: 'keyframe', flags: 2, sequence: 3, triangleIds: [1], mesh: { vertices: square.vertices.slice(0, 3), triangles: [[1, 2, 3]] } });
+  assert.equal(session.mesh.synchronized, true);
+  assert.equal(session.mesh.triangleCount, 1);
+  socket.frame({ sequence: 4, removed: [1] });
+  assert.equal(session.mesh.triangleCount, 0);
+});
+
+test('a frame that does not decode makes its session resync', async () => {
+  const { client, socket } = await connected();
+  const session = await created(client, socket);
+  const errors = [];
+  session.on('error', (e) => errors.push(e.code));
+  const bytes = buildFrame({ sequence: 1, removed: [1, 2], override: { removedCount: 3 } });
+  socket.onmessage({ data: bytes.buffer });
+  assert.deepEqual(errors, ['bad_frame']);
+  assert.equal(socket.lastSent().type, 'resync');
+});
+
+test('errors that answer no request go to the session or the client', async () => {
+  const { client, socket } = await connected();
+  const session = await created(client, socket);
+  const seen = [];
+  session.on('error', (e) => seen.push(['session', e.code]));
+  client.on('error', (e) => seen.push(['client', e.code]));
+  socket.reply({ type: 'error', session: SESSION, code: 'eval_timeout', message: 'too slow' });
+  socket.reply({ type: 'error', code: 'bad_json', message: 'not JSON' });
+  socket.onmessage({ data: '{"v":2,"type":"pong"}' });
+  assert.deepEqual(seen, [['session', 'eval_timeout'], ['client', 'bad_json'], ['client', 'unsupported_version']]);
+});
+
+test('closed sessions leave the client; a closed connection rejects pending requests', async () => {
+  const { client, socket } = await connected();
+  const session = await created(client, socket);
+  let reason = null;
+  session.on('closed', (m) => (reason = m.reason));
+  socket.reply({ type: 'closed', session: SESSION, reason: 'expired' });
+  assert.equal(reason, 'expired');
+  assert.equal(client.sessions.size, 0);
+  const ping = client.ping();
+  client.close();
+  await assert.rejects(ping, (e) => e.code === 'closed');
+  await assert.rejects(client.ping(), (e) => e.code === 'closed');
+});
+
+test('requests time out when no reply comes', async () => {
+  const client = await connect('ws://x', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder(), requestTimeoutMs: 10 });
+  await assert.rejects(client.ping(), (e) => e.code === 'timeout');
+});
+
+test('bad arguments fail before anything is sent', async () => {
+  const { client, socket } = await connected();
+  await assert.rejects(client.create({ expression: 'x=1', box: [0, 1, 0, 1, 0] }), /box/);
+  await assert.rejects(client.create({ expression: 'x=1', parameters: { a: NaN } }), /finite/);
+  await assert.rejects(client.create({ expression: 'x=1', constraints: { triangles: 0.5 } }), /triangles/);
+  assert.equal(socket.sent.length, 0);
+});
