@@ -24,15 +24,17 @@ namespace fs = std::filesystem;
 
 constexpr int kCases = 10000;
 
-fs::path testdata_dir() { return fs::path(ISOMESH_BINARY_DIR) / "testdata" / "mc33"; }
+fs::path testdata_dir() {
+    return fs::path(ISOMESH_BINARY_DIR) / "testdata" / "mc33";
+}
 
 /// Unpacks an archive of the shared suite into the build tree once (a marker file records it).
 void unpack(const std::string& archive) {
     const fs::path marker = testdata_dir() / (archive + ".unpacked");
     if (fs::exists(marker)) return;
     fs::create_directories(testdata_dir());
-    const std::string command = "tar -xJf '" + std::string(ISOMESH_SHARED_DIR) +
-                                "/testdata/mc33/" + archive + "' -C '" + testdata_dir().string() +
+    const std::string command = "tar -xJf '" + std::string(ISOMESH_SHARED_DIR) + "/testdata/mc33/" +
+                                archive + "' -C '" + testdata_dir().string() +
                                 "' --wildcards '*.iso' '*.txt'";  // not the .nhdr/.raw copies
     ASSERT_EQ(std::system(command.c_str()), 0) << command;
     std::ofstream(marker) << "ok\n";
@@ -52,7 +54,11 @@ IsoGrid read_iso(const fs::path& path) {
     float bounds[6];
     in.read(reinterpret_cast<char*>(n), sizeof n);
     in.read(reinterpret_cast<char*>(bounds), sizeof bounds);
-    IsoGrid grid{n[0], n[1], n[2], Box{{bounds[0], bounds[2], bounds[4]}, {bounds[1], bounds[3], bounds[5]}}, {}};
+    IsoGrid grid{n[0],
+                 n[1],
+                 n[2],
+                 Box{{bounds[0], bounds[2], bounds[4]}, {bounds[1], bounds[3], bounds[5]}},
+                 {}};
     std::vector<float> samples(static_cast<std::size_t>(n[0]) * n[1] * n[2]);
     in.read(reinterpret_cast<char*>(samples.data()),
             static_cast<std::streamsize>(samples.size() * sizeof(float)));
@@ -79,7 +85,22 @@ long euler_characteristic(const CellTriangulation& cell) {
             edges.insert({std::min(a, b), std::max(a, b)});
         }
     }
-    return static_cast<long>(vertices.size()) - static_cast<long>(edges.size()) + cell.triangle_count;
+    return static_cast<long>(vertices.size()) - static_cast<long>(edges.size()) +
+           cell.triangle_count;
+}
+
+/// Volume enclosed by a closed mesh (divergence theorem): positive when the triangles face out
+/// of the negative region, as they must.
+double signed_volume(const Mesh& mesh) {
+    double volume = 0.0;
+    for (const auto& t : mesh.triangles) {
+        const glm::dvec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]],
+                         &c = mesh.positions[t[2]];
+        volume += (a.x * (b.y * c.z - b.z * c.y) - a.y * (b.x * c.z - b.z * c.x) +
+                   a.z * (b.x * c.y - b.y * c.x)) /
+                  6.0;
+    }
+    return volume;
 }
 
 TEST(Mc33Suite, single_cells_have_the_expected_euler_characteristic) {
@@ -122,6 +143,7 @@ TEST(Mc33Suite, closed_surfaces_have_the_expected_betti_numbers) {
         const TopologyReport report = analyze_topology(mesh);
         EXPECT_TRUE(report.watertight() && report.manifold()) << "case " << i;
         EXPECT_EQ(report.inconsistently_oriented_edges, 0u) << "case " << i;
+        EXPECT_GT(signed_volume(mesh), 0.0) << "case " << i << ": not facing outwards";
         const long genus = report.first_betti_number() / 2;
         const bool ok = static_cast<long>(report.components) == expected[0] && genus == expected[1];
         EXPECT_TRUE(ok) << "case " << i << ": b0 " << report.components << " genus " << genus
