@@ -26,8 +26,15 @@ std::string read_text(const std::filesystem::path& path) {
 /// Single-quotes an argument for /bin/sh.
 std::string shell_quote(std::string_view arg) {
     std::string quoted = "'";
-    for (char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return quoted + "'";
+    for (char c : arg) {
+        if (c == '\'') {
+            quoted.append("'\\''");
+        } else {
+            quoted.push_back(c);
+        }
+    }
+    quoted.push_back('\'');
+    return quoted;
 }
 
 CliRun isomesh(std::initializer_list<std::string_view> args) {
@@ -35,17 +42,18 @@ CliRun isomesh(std::initializer_list<std::string_view> args) {
     auto scratch =
         std::filesystem::temp_directory_path() /
         ("isomesh_cli_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+    std::string out_path = scratch.string() + ".out";
+    std::string err_path = scratch.string() + ".err";
     std::string command = shell_quote(std::string(ISOMESH_BINARY_DIR) + "/bin/isomesh");
-    for (std::string_view arg : args) command += " " + shell_quote(arg);
-    command += " >" + shell_quote((scratch.string() + ".out")) + " 2>" +
-               shell_quote(scratch.string() + ".err");
+    for (std::string_view arg : args) command.append(" ").append(shell_quote(arg));
+    command.append(" >").append(shell_quote(out_path)).append(" 2>").append(shell_quote(err_path));
     int raw = std::system(command.c_str());
     CliRun run;
     run.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-    run.out = read_text(scratch.string() + ".out");
-    run.err = read_text(scratch.string() + ".err");
-    std::filesystem::remove(scratch.string() + ".out");
-    std::filesystem::remove(scratch.string() + ".err");
+    run.out = read_text(out_path);
+    run.err = read_text(err_path);
+    std::filesystem::remove(out_path);
+    std::filesystem::remove(err_path);
     return run;
 }
 
@@ -86,7 +94,7 @@ TEST(EvalCommand, box_prints_interval_and_flags) {
 }
 
 TEST(EvalCommand, reads_vm_files) {
-    std::string model = "@" + std::string(ISOMESH_SHARED_DIR) + "/testdata/vm/tanglecube.vm";
+    std::string model = std::string("@" ISOMESH_SHARED_DIR) + "/testdata/vm/tanglecube.vm";
     nlohmann::json out = single_json_line(isomesh({"eval", model, "--at", "0,0,0"}));
     EXPECT_DOUBLE_EQ(out["value"].get<double>(), 10.0);
 }
