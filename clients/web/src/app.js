@@ -1,0 +1,258 @@
+// The viewer's session logic: one connection, one session, and the user's edits turned into
+// `update` requests.
+//
+// Edits are coalesced: at most one update is in flight; edits made meanwhile (a slider being
+// dragged) are merged and sent when its reply arrives, so the surface follows the latest value at
+// the pace of the round trip instead of queueing every intermediate one. The state the server
+// reports (created/updated) is what the panel then shows: the parameter list, constraints, box.
+
+import { connect } from 'isomesh-client';
+
+import { parameterNames, valuesFor } from './parameters.js';
+
+const RECONNECT_MS = [500, 1000, 2000, 5000, 10000];
+
+export class App {
+  /**
+   * @param {{panel: Panel, viewer: Viewer, url: string, decoder: object, initial: object}} options
+   *   initial: {expression, parameters, box, constraints} of the first session
+   */
+  constructor({ panel, viewer, url, decoder, initial }) {
+    this.panel = panel;
+    this.viewer = viewer;
+    this.url = url;
+    this.decoder = decoder;
+    this.wanted = { ...initial, parameters: { ...(initial.parameters ?? {}) } };
+    this.client = null;
+    this.session = null;
+    this.status = 'connecting';
+    this.lastError = null; // {code, message, column} of the last rejected request
+    this.errorMax = null;
+    this.pending = null; // fields of the next update
+    this.inFlight = false;
+    this.paused = false;
+    this.reconnects = 0;
+    this.framedBox = null;
+  }
+
+  async start() {
+    this.#setStatus('connecting');
+    try {
+      this.client = await connect(this.url, { decoder: this.decoder });
+    } catch (error) {
+      this.#disconnected(error.message);
+      return;
+    }
+    this.reconnects = 0;
+    this.client.on('close', () => this.#disconnected('connection closed'));
+    this.client.on('error', (error) => console.warn('isomesh:', error));
+    await this.#createSession();
+  }
+
+  // ---- user edits ------------------------------------------------------------------------------
+
+  setEquation(text) {
+    if (text === '') return;
+    const parameters = valuesFor(parameterNames(text), this.wanted.parameters);
+    this.wanted.expression = text;
+    Object.assign(this.wanted.parameters, parameters);
+    this.#change({ expression: text, parameters });
+  }
+
+  setParameter(name, value) {
+    this.wanted.parameters[name] = value;
+    this.#change({ parameters: { [name]: value } });
+  }
+
+  setConstraints(constraints) {
+    this.wanted.constraints = { ...this.wanted.constraints, ...constraints };
+    this.#change({ constraints });
+  }
+
+  setBox(box) {
+    this.wanted.box = box;
+    this.#change({ box });
+  }
+
+  showExample(example) {
+    this.wanted.expression = example.expression;
+    this.wanted.box = example.box;
+    Object.assign(this.wanted.parameters, example.parameters ?? {});
+    const parameters = valuesFor(parameterNames(example.expression), this.wanted.parameters);
+    this.panel.setEquation(example.expression);
+    this.framedBox = null; // aim the camera at the new box once the server accepts it
+    this.#change({ expression: example.expression, parameters, box: example.box });
+  }
+
+  async togglePause() {
+    if (!this.session) return;
+    this.paused = !this.paused;
+    this.panel.setPaused(this.paused);
+    await (this.paused ? this.session.pause() : this.session.resume()).catch((e) => this.#requestFailed(e, {}));
+    this.#refreshStatus();
+  }
+
+  // ---- session ---------------------------------------------------------------------------------
+
+  async #createSession() {
+    const { expression, parameters, box, constraints } = this.wanted;
+    this.#setStatus('meshing');
+    const names = parameterNames(expression);
+    try {
+      this.session = await this.client.create({ expression, parameters: valuesFor(names, parameters), box, constraints });
+    } catch (error) {
+      this.session = null;
+      this.#requestFailed(error, { expression });
+      return;
+    }
+    this.panel.clearError();
+    this.lastError = null;
+    this.#watch(this.session);
+    this.viewer.showSlots(this.session.mesh.slots);
+    this.#applyState(this.session.state);
+    this.#pump();
+  }
+
+  #watch(session) {
+    session.on('state', () => this.#refreshStatus());
+    session.on('keyframe', () => this.#meshChanged());
+    session.on('delta', () => this.#meshChanged());
+    session.on('firstMesh', () => this.#refreshStatus());
+    session.on('progress', (m) => {
+      if (m.version === session.state?.version) this.errorMax = m.error_max;
+      this.#refreshStatus();
+    });
+    session.on('converged', (m) => {
+      if (m.version === session.state?.version) this.errorMax = m.error_max;
+      this.#refreshStatus();
+    });
+    session.on('error', (error) => {
+      this.lastError = { code: error.code, message: error.message, column: error.column ?? null };
+      this.panel.showError(this.wanted.expression, error.message, error.column);
+      this.#refreshStatus();
+    });
+    session.on('closed', (m) => {
+      if (this.session === session) this.session = null;
+      this.#setStatus(m.reason === 'shutdown' ? 'disconnected' : 'closed');
+    });
+  }
+
+  #change(fields) {
+    if (!this.session) {
+      // No session yet (its creation failed, e.g. on a bad equation): try again with everything.
+      if (this.client && !this.client.closed && fields.expression !== undefined) this.#createSession();
+      return;
+    }
+    this.pending = mergeFields(this.pending, fields);
+    this.#setStatus('meshing');
+    this.#pump();
+  }
+
+  async #pump() {
+    if (this.inFlight || !this.session || !this.pending) return;
+    const fields = this.pending;
+    this.pending = null;
+    this.inFlight = true;
+    try {
+      const state = await this.session.update(fields);
+      if (fields.expression !== undefined) {
+        this.panel.clearError();
+        this.lastError = null;
+      }
+      this.#applyState(state);
+    } catch (error) {
+      this.#requestFailed(error, fields);
+    } finally {
+      this.inFlight = false;
+    }
+    this.#pump();
+  }
+
+  #applyState(state) {
+    this.wanted.expression = state.expression ?? this.wanted.expression;
+    this.wanted.box = state.box;
+    this.wanted.constraints = { triangles: state.constraints?.triangles, max_error: state.constraints?.max_error };
+    if (!this.pending?.parameters) Object.assign(this.wanted.parameters, state.parameters);
+    this.panel.setParameters(state.parameters);
+    this.panel.setConstraints(state.constraints ?? {});
+    this.panel.setBox(state.box);
+    if (this.panel.equation.value.trim() === '') this.panel.setEquation(this.wanted.expression);
+    const boxKey = state.box.join(',');
+    this.viewer.setBox(state.box, { frame: this.framedBox === null });
+    this.framedBox = boxKey;
+    this.#refreshStatus();
+  }
+
+  #requestFailed(error, fields) {
+    this.lastError = { code: error.code ?? 'internal', message: error.message, column: error.column ?? null };
+    const text = fields.expression ?? this.wanted.expression;
+    this.panel.showError(text, error.message, error.column);
+    this.#refreshStatus();
+  }
+
+  #meshChanged() {
+    this.viewer.requestRender();
+    this.#refreshStatus();
+  }
+
+  #disconnected(reason) {
+    this.session = null;
+    this.client = null;
+    this.inFlight = false;
+    this.#setStatus('disconnected', reason);
+    const delay = RECONNECT_MS[Math.min(this.reconnects++, RECONNECT_MS.length - 1)];
+    setTimeout(() => this.start(), delay);
+  }
+
+  // ---- status ----------------------------------------------------------------------------------
+
+  #refreshStatus() {
+    const s = this.session;
+    if (!s) {
+      this.#setStatus(this.lastError ? 'error' : this.status);
+      return;
+    }
+    let status = 'refining';
+    if (this.paused) status = 'paused';
+    else if (this.pending || this.inFlight || !s.mesh.synchronized || s.mesh.functionVersion < (s.state?.version ?? 0)) status = 'meshing';
+    else if (s.converged) status = 'converged';
+    this.#setStatus(status);
+  }
+
+  #setStatus(status, detail = '') {
+    this.status = status;
+    this.statusDetail = detail;
+    this.onStatus?.(this);
+  }
+
+  /** What the status line and tests read. */
+  snapshot() {
+    const s = this.session;
+    return {
+      status: this.status,
+      detail: this.statusDetail,
+      session: s?.id ?? null,
+      version: s?.state?.version ?? null,
+      sequence: s?.mesh.sequence ?? null,
+      triangles: s?.mesh.triangleCount ?? 0,
+      errorMax: this.errorMax,
+      bytesReceived: this.client?.bytesReceived ?? 0,
+      firstMeshMs: s?.stats.firstMeshMs ?? null,
+      serverFirstMeshMs: s?.lastConverged?.first_mesh_ms ?? null,
+      expression: this.wanted.expression,
+      parameters: { ...(s?.state?.parameters ?? {}) },
+      box: s?.state?.box ?? this.wanted.box,
+      constraints: s?.state?.constraints ?? null,
+      error: this.lastError,
+    };
+  }
+}
+
+/** Later fields win; parameters and constraints merge name by name. */
+function mergeFields(earlier, later) {
+  if (!earlier) return { ...later };
+  const merged = { ...earlier, ...later };
+  if (earlier.parameters || later.parameters) merged.parameters = { ...earlier.parameters, ...later.parameters };
+  if (earlier.constraints || later.constraints) merged.constraints = { ...earlier.constraints, ...later.constraints };
+  return merged;
+}

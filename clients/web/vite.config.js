@@ -1,0 +1,36 @@
+// Vite configuration of the browser viewer.
+//
+// `npm run build` writes the static site to build/web at the repository root (next to build/bin),
+// where isomesh-server serves it with `--web-root build/web`. Everything (three.js, the Draco
+// decoder's .wasm) is bundled: the page needs no internet access.
+//
+// `npm run dev` serves the viewer with hot reload on 127.0.0.1:5173 and forwards /ws to a server
+// on 127.0.0.1:8080 (ISOMESH_SERVER overrides).
+import { fileURLToPath } from 'node:url';
+
+import { defineConfig } from 'vite';
+
+const here = (path) => fileURLToPath(new URL(path, import.meta.url));
+
+export default defineConfig({
+  base: './',
+  resolve: {
+    // The client library is used from source (clients/js); its draco3d import resolves here.
+    alias: {
+      'isomesh-client': here('../js/src/index.js'),
+      fs: here('src/node_stub.js'),
+      path: here('src/node_stub.js'),
+    },
+    dedupe: ['draco3d'],
+  },
+  build: {
+    outDir: here('../../build/web'),
+    emptyOutDir: true,
+    target: 'es2022',
+    chunkSizeWarningLimit: 1024,
+  },
+  server: {
+    host: '127.0.0.1',
+    proxy: { '/ws': { target: process.env.ISOMESH_SERVER ?? 'ws://127.0.0.1:8080', ws: true } },
+  },
+});
