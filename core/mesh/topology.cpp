@@ -167,6 +167,16 @@ TopologyReport analyze_topology(const Mesh& mesh) {
     return report;
 }
 
+double signed_volume(const Mesh& mesh) {
+    check_indices(mesh);
+    double volume = 0.0;
+    for (const auto& t : mesh.triangles) {
+        const glm::dvec3& p0 = mesh.positions[t[0]];
+        volume += glm::dot(p0, glm::cross(mesh.positions[t[1]], mesh.positions[t[2]]));
+    }
+    return volume / 6.0;
+}
+
 void build_adjacency(Mesh& mesh) {
     if (mesh.positions.empty() && !mesh.triangles.empty()) {
         throw std::invalid_argument("build_adjacency needs vertex positions");

@@ -40,6 +40,11 @@ struct TopologyReport {
 /// (unless positions is empty: a purely combinatorial mesh).
 TopologyReport analyze_topology(const Mesh& mesh);
 
+/// The volume enclosed by a closed mesh (divergence theorem: the sum over triangles of
+/// p0 . (p1 x p2) / 6). Positive when the triangles face outwards, away from the enclosed (f < 0)
+/// region, as the polygonizer's must; meaningless for an open mesh.
+double signed_volume(const Mesh& mesh);
+
 /// Fills mesh.neighbours (see mesh.h: neighbours[t][e] is across the edge from triangles[t][e]
 /// to triangles[t][(e + 1) % 3], kNoNeighbour on the boundary) and mesh.base_edge (the longest
 /// edge; equal lengths are ordered by the edge's (smaller, larger) vertex indices, smallest first,

@@ -16,9 +16,10 @@
 //   edge is crossed when its two corners differ in that sense, and then exactly once.
 // - Triangles use vertex ids 0..11 (the vertex on that edge; the caller places it at the edge's
 //   crossing, by linear interpolation or root finding) and kInteriorVertex (12), a vertex inside
-//   the cell that the subcases with a contour loop of 7 or more vertices (6.2, 7.3, 10.2, 12.2,
-//   12.3, 13.x...) fan around. Recommended position: the mean of the crossing points of the edges
-//   in CellTriangulation::interior_vertex_edges (what uniform_grid_mesher.h does).
+//   the cell: the subcases with a contour loop of 7 or more vertices (6.2, 7.3, 10.2, 12.x, 13.x)
+//   fan that loop around it, and some tunnels (6.1.2, 7.4.2...) pass through it. Recommended
+//   position: the mean of the crossing points of the edges in
+//   CellTriangulation::interior_vertex_edges (what uniform_grid_mesher.h does).
 // - Orientation: each triangle is counter-clockwise seen from the outside (f > 0), so its
 //   geometric normal points towards increasing f.
 // - Watertightness: the face test depends only on the four values of the face, symmetrically, so
@@ -52,7 +53,7 @@ struct CellTriangulation {
     std::uint8_t triangle_count = 0;
     /// triangles[0 .. triangle_count): vertex ids 0..11 (edges) or kInteriorVertex.
     std::array<std::array<std::uint8_t, 3>, 12> triangles{};
-    /// Bit e set for the edges of the contour loop that kInteriorVertex fans (0 when unused): the
+    /// Bit e set for the edges of the contour loop(s) around kInteriorVertex (0 when unused): the
     /// recommended position of that vertex is the mean of these edges' crossing points.
     std::uint16_t interior_vertex_edges = 0;
 

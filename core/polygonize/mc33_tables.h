@@ -7,8 +7,9 @@
 // trilinear interpolant's surface inside the cell is then a disk per loop, except that the interior
 // test may find two same-sign patches joined through the cell, in which case the two loops around
 // the patch between them bound a tube (the "tunnel" subcases 4.1.2, 6.1.2, 7.4.2, 10.1.2, 12.1.2,
-// 13.5.2 of Chernyaev). mc33_tables_test.cpp checks every entry and classifies them under the
-// cube's 48 symmetries and complementation into the paper's cases.
+// 13.5.2 of Chernyaev). mc33_tables_test.cpp checks every entry, and classifies the
+// configurations realised by random cells under the cube's 24 rotations and complementation: they
+// fall into exactly the paper's 15 cases and 33 subcases.
 #pragma once
 
 #include <array>

@@ -61,6 +61,13 @@ TEST(Topology, torus_has_first_betti_number_two) {
     EXPECT_EQ(r.inconsistently_oriented_edges, 0u);
 }
 
+TEST(Topology, signed_volume_is_positive_for_outward_triangles) {
+    Mesh mesh = tetrahedron();
+    EXPECT_NEAR(signed_volume(mesh), 8.0 / 3.0, 1e-12);  // the cube [-1, 1]^3 minus 4 corners
+    for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
+    EXPECT_NEAR(signed_volume(mesh), -8.0 / 3.0, 1e-12);
+}
+
 TEST(Topology, components_and_unused_vertices) {
     Mesh mesh = tetrahedron();
     Mesh other = tetrahedron();

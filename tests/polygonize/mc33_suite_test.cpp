@@ -89,20 +89,6 @@ long euler_characteristic(const CellTriangulation& cell) {
            cell.triangle_count;
 }
 
-/// Volume enclosed by a closed mesh (divergence theorem): positive when the triangles face out
-/// of the negative region, as they must.
-double signed_volume(const Mesh& mesh) {
-    double volume = 0.0;
-    for (const auto& t : mesh.triangles) {
-        const glm::dvec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]],
-                         &c = mesh.positions[t[2]];
-        volume += (a.x * (b.y * c.z - b.z * c.y) - a.y * (b.x * c.z - b.z * c.x) +
-                   a.z * (b.x * c.y - b.y * c.x)) /
-                  6.0;
-    }
-    return volume;
-}
-
 TEST(Mc33Suite, single_cells_have_the_expected_euler_characteristic) {
     unpack("MarchingCubes_cases.tar.xz");
     const fs::path root = testdata_dir() / "MarchingCubes_cases";

@@ -26,18 +26,6 @@ std::vector<double> sample(const std::function<double(glm::dvec3)>& f, const Box
     return values;
 }
 
-/// Signed volume enclosed by a closed mesh (divergence theorem): positive when the triangles
-/// face outwards.
-double signed_volume(const Mesh& mesh) {
-    double volume = 0.0;
-    for (const auto& t : mesh.triangles) {
-        volume +=
-            glm::dot(mesh.positions[t[0]], glm::cross(mesh.positions[t[1]], mesh.positions[t[2]])) /
-            6.0;
-    }
-    return volume;
-}
-
 const Box kBox{{-2.0, -2.0, -2.0}, {2.0, 2.0, 2.0}};
 
 double sphere(glm::dvec3 p) {
