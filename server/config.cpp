@@ -1,0 +1,237 @@
+#include "server/config.h"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <thread>
+
+namespace isomesh::server {
+namespace {
+
+constexpr std::array<std::string_view, 4> kLogLevelNames = {"debug", "info", "warn", "error"};
+
+/// The error message of a rejected value, or nothing when it was stored.
+using Setter = std::function<std::optional<std::string>(ServerConfig&, std::string_view)>;
+using Shower = std::function<std::string(const ServerConfig&)>;
+
+struct Option {
+    std::string_view name;  // without "--"
+    std::string_view help;
+    Setter set;
+    Shower show;
+};
+
+std::optional<std::uint64_t> parse_integer(std::string_view text) {
+    std::uint64_t value = 0;
+    const char* end = text.data() + text.size();
+    auto [ptr, ec] = std::from_chars(text.data(), end, value);
+    if (text.empty() || ec != std::errc() || ptr != end) return std::nullopt;
+    return value;
+}
+
+std::optional<double> parse_real(std::string_view text) {
+    double value = 0;
+    const char* end = text.data() + text.size();
+    auto [ptr, ec] = std::from_chars(text.data(), end, value);
+    if (text.empty() || ec != std::errc() || ptr != end || !std::isfinite(value))
+        return std::nullopt;
+    return value;
+}
+
+std::string range_message(std::string_view what, auto low, auto high) {
+    return std::string(what) + " between " + std::to_string(low) + " and " + std::to_string(high);
+}
+
+/// An option holding an integer field in [low, high].
+template <class T>
+Option integer_option(std::string_view name, std::string_view help, T ServerConfig::*field,
+                      std::uint64_t low, std::uint64_t high) {
+    Setter set = [=](ServerConfig& c, std::string_view text) -> std::optional<std::string> {
+        auto value = parse_integer(text);
+        if (!value || *value < low || *value > high) return range_message("an integer", low, high);
+        c.*field = static_cast<T>(*value);
+        return std::nullopt;
+    };
+    Shower show = [=](const ServerConfig& c) { return std::to_string(c.*field); };
+    return {name, help, set, show};
+}
+
+Option real_option(std::string_view name, std::string_view help, double ServerConfig::*field,
+                   double low, double high) {
+    Setter set = [=](ServerConfig& c, std::string_view text) -> std::optional<std::string> {
+        auto value = parse_real(text);
+        if (!value || *value < low || *value > high) return range_message("a number", low, high);
+        c.*field = *value;
+        return std::nullopt;
+    };
+    Shower show = [=](const ServerConfig& c) {
+        std::string text = std::to_string(c.*field);
+        text.erase(text.find_last_not_of('0') + 1);
+        if (text.back() == '.') text.pop_back();
+        return text;
+    };
+    return {name, help, set, show};
+}
+
+Option string_option(std::string_view name, std::string_view help,
+                     std::string ServerConfig::*field) {
+    Setter set = [=](ServerConfig& c, std::string_view text) -> std::optional<std::string> {
+        c.*field = std::string(text);
+        return std::nullopt;
+    };
+    Shower show = [=](const ServerConfig& c) { return c.*field; };
+    return {name, help, set, show};
+}
+
+Option log_level_option() {
+    Setter set = [](ServerConfig& c, std::string_view text) -> std::optional<std::string> {
+        auto level = log_level_from_string(text);
+        if (!level) return "one of debug, info, warn, error";
+        c.log_level = *level;
+        return std::nullopt;
+    };
+    Shower show = [](const ServerConfig& c) { return std::string(to_string(c.log_level)); };
+    return {"log-level", "debug, info, warn or error", set, show};
+}
+
+const std::vector<Option>& options() {
+    constexpr std::uint64_t kU32 = std::numeric_limits<std::uint32_t>::max();
+    constexpr double kDay = 86400;
+    static const std::vector<Option> table = {
+        string_option("bind", "address to listen on", &ServerConfig::bind_address),
+        integer_option("port", "TCP port (0: any free port)", &ServerConfig::port, 0, 65535),
+        integer_option("io-threads", "network threads", &ServerConfig::io_threads, 1, 64),
+        string_option("web-root", "folder of the browser client served at / (empty: built-in page)",
+                      &ServerConfig::web_root),
+        integer_option("threads", "refinement worker threads (0: one per core)",
+                       &ServerConfig::worker_threads, 0, 256),
+        integer_option("slice-us", "refinement time slice per turn of a session, microseconds",
+                       &ServerConfig::slice_us, 100, 1'000'000),
+        integer_option("batch-ms", "longest wait before refinement deltas are sent",
+                       &ServerConfig::batch_ms, 1, 10'000),
+        integer_option("batch-triangles", "triangles changed that trigger sending a delta",
+                       &ServerConfig::batch_triangles, 1, kU32),
+        integer_option("max-message-bytes", "largest control message accepted",
+                       &ServerConfig::max_message_bytes, 256, 64 << 20),
+        integer_option("max-sessions-per-connection", "sessions one connection may hold",
+                       &ServerConfig::max_sessions_per_connection, 1, 1 << 20),
+        integer_option("max-connections", "simultaneous WebSocket connections",
+                       &ServerConfig::max_connections, 1, 1 << 20),
+        integer_option("max-triangles", "largest triangle budget a session may ask for",
+                       &ServerConfig::max_triangles, 1, 1ull << 40),
+        integer_option("default-triangles", "triangle budget of a session that names none",
+                       &ServerConfig::default_triangles, 1, 1ull << 40),
+        real_option("default-max-error", "error bound of a session that names none (0: none)",
+                    &ServerConfig::default_max_error, 0, 1e300),
+        integer_option("eval-timeout-ms", "time limit of phase 1 for one function version",
+                       &ServerConfig::eval_timeout_ms, 1, kU32),
+        integer_option("queue-bytes",
+                       "output bytes queued per connection before deltas are dropped",
+                       &ServerConfig::queue_bytes, 4096, 1ull << 34),
+        real_option("idle-timeout", "seconds without requests after which a session expires",
+                    &ServerConfig::idle_timeout_s, 0.01, 365 * kDay),
+        real_option("orphan-timeout", "seconds without subscribers after which a session expires",
+                    &ServerConfig::orphan_timeout_s, 0, 365 * kDay),
+        real_option("drain-timeout", "seconds queued frames may take to leave at shutdown",
+                    &ServerConfig::drain_timeout_s, 0, 3600),
+        log_level_option(),
+    };
+    return table;
+}
+
+/// ISOMESH_ followed by the option's name in upper case with '_' for '-'.
+std::string env_name(std::string_view option) {
+    std::string name = "ISOMESH_";
+    for (char c : option) name += c == '-' ? '_' : static_cast<char>(std::toupper(c));
+    return name;
+}
+
+const Option* find_option(std::string_view name) {
+    for (const Option& option : options()) {
+        if (option.name == name) return &option;
+    }
+    return nullptr;
+}
+
+std::optional<std::string> apply(ServerConfig& config, const Option& option, std::string_view value,
+                                 std::string_view source) {
+    if (auto problem = option.set(config, value))
+        return std::string(source) + ": expected " + *problem + ", got '" + std::string(value) +
+               "'";
+    return std::nullopt;
+}
+
+}  // namespace
+
+std::string_view to_string(LogLevel level) {
+    return kLogLevelNames[static_cast<int>(level)];
+}
+
+std::optional<LogLevel> log_level_from_string(std::string_view name) {
+    auto it = std::find(kLogLevelNames.begin(), kLogLevelNames.end(), name);
+    if (it == kLogLevelNames.end()) return std::nullopt;
+    return static_cast<LogLevel>(it - kLogLevelNames.begin());
+}
+
+ConfigResult parse_config(std::span<const std::string_view> args,
+                          const std::function<const char*(const char*)>& getenv) {
+    ServerConfig config;
+    for (const Option& option : options()) {
+        const std::string variable = env_name(option.name);
+        if (const char* value = getenv(variable.c_str())) {
+            if (auto error = apply(config, option, value, variable)) return ConfigError{*error};
+        }
+    }
+    std::vector<std::string_view> given;
+    for (std::size_t i = 0; i < args.size(); ++i) {
+        std::string_view arg = args[i];
+        if (arg == "--help" || arg == "-h") return HelpRequested{};
+        if (!arg.starts_with("--"))
+            return ConfigError{"unexpected argument '" + std::string(arg) + "'"};
+        arg.remove_prefix(2);
+        std::optional<std::string_view> value;
+        if (auto eq = arg.find('='); eq != std::string_view::npos) {
+            value = arg.substr(eq + 1);
+            arg = arg.substr(0, eq);
+        }
+        const Option* option = find_option(arg);
+        if (!option) return ConfigError{"unknown option '--" + std::string(arg) + "'"};
+        if (std::find(given.begin(), given.end(), arg) != given.end())
+            return ConfigError{"option '--" + std::string(arg) + "' given twice"};
+        given.push_back(arg);
+        if (!value) {
+            if (i + 1 == args.size())
+                return ConfigError{"option '--" + std::string(arg) + "' needs a value"};
+            value = args[++i];
+        }
+        if (auto error = apply(config, *option, *value, "--" + std::string(arg)))
+            return ConfigError{*error};
+    }
+    if (config.default_triangles > config.max_triangles)
+        return ConfigError{"--default-triangles exceeds --max-triangles"};
+    return config;
+}
+
+std::string config_usage() {
+    const ServerConfig defaults;
+    std::string text =
+        "usage: isomesh-server [--OPTION VALUE]...\n\n"
+        "Serves isosurface meshing sessions over WebSocket at /ws, the browser client at /,\n"
+        "/healthz and /metrics (Prometheus). Every option may also be set by the environment\n"
+        "variable shown; the command line wins.\n\noptions:\n";
+    for (const Option& option : options()) {
+        text += "  --" + std::string(option.name) + " (" + env_name(option.name) + ", default '" +
+                option.show(defaults) + "')\n      " + std::string(option.help) + "\n";
+    }
+    return text;
+}
+
+unsigned resolved_worker_threads(const ServerConfig& config) {
+    if (config.worker_threads > 0) return config.worker_threads;
+    return std::max(1u, std::thread::hardware_concurrency());
+}
+
+}  // namespace isomesh::server

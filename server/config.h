@@ -1,0 +1,70 @@
+// The server's configuration: command-line flags, each with an environment variable as fallback
+// (`--max-sessions-per-connection 8` or ISOMESH_MAX_SESSIONS_PER_CONNECTION=8; a flag wins over
+// the environment, the environment over the default). `isomesh-server --help` lists them all.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <variant>
+
+namespace isomesh::server {
+
+enum class LogLevel { debug, info, warn, error };
+
+std::string_view to_string(LogLevel level);
+std::optional<LogLevel> log_level_from_string(std::string_view name);
+
+struct ServerConfig {
+    // network
+    std::string bind_address = "0.0.0.0";
+    std::uint16_t port = 8080;  ///< 0: any free port (logged in the "listening" line)
+    unsigned io_threads = 1;
+    /// The browser client's files, served at GET /. Empty or missing: an embedded page.
+    std::string web_root;
+
+    // work
+    unsigned worker_threads = 0;    ///< 0: one per core
+    std::uint32_t slice_us = 2000;  ///< refinement time slice per turn of a session
+    std::uint32_t batch_ms = 20;    ///< deltas are flushed at least this often while refining
+    std::uint32_t batch_triangles = 2000;  ///< ... and as soon as this many triangles changed
+
+    // limits
+    std::size_t max_message_bytes = 1 << 20;  ///< larger control messages get too_large
+    std::size_t max_sessions_per_connection = 16;
+    std::size_t max_connections = 1024;
+    std::uint64_t max_triangles = 2'000'000;  ///< budgets above this get budget_too_large
+    std::uint64_t default_triangles = 20'000;
+    double default_max_error = 0.0;          ///< 0: refine to the triangle budget
+    std::uint32_t eval_timeout_ms = 10'000;  ///< phase 1 of one function version
+    std::size_t queue_bytes = 4 << 20;       ///< per-connection output budget (backpressure)
+    double idle_timeout_s = 3600;            ///< a session without requests for this long expires
+    double orphan_timeout_s = 30;  ///< a session without subscribers for this long expires
+    double drain_timeout_s = 5;    ///< SIGTERM: how long queued frames may take to leave
+
+    LogLevel log_level = LogLevel::info;
+};
+
+/// What parse_config found: a configuration, a request for help, or a usage error (message).
+struct HelpRequested {};
+struct ConfigError {
+    std::string message;
+};
+using ConfigResult = std::variant<ServerConfig, HelpRequested, ConfigError>;
+
+/// Reads `args` (without the program name) as `--name value` or `--name=value`, with `getenv`
+/// consulted for every option not given on the command line. Never throws on bad input.
+ConfigResult parse_config(std::span<const std::string_view> args,
+                          const std::function<const char*(const char*)>& getenv);
+
+/// The --help text: every option, its environment variable and its default.
+std::string config_usage();
+
+/// The worker thread count: config.worker_threads, or the number of cores when 0.
+unsigned resolved_worker_threads(const ServerConfig& config);
+
+}  // namespace isomesh::server

@@ -1,0 +1,111 @@
+#include "server/metrics.h"
+
+#include <cstdio>
+
+namespace isomesh::server {
+namespace {
+
+std::string format_number(double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.9g", value);
+    return text;
+}
+
+void header(std::string& out, const std::string& name, const char* type, const char* help) {
+    out += "# HELP " + name + " " + help + "\n# TYPE " + name + " " + type + "\n";
+}
+
+void metric(std::string& out, const std::string& name, const char* type, const char* help,
+            double value) {
+    header(out, name, type, help);
+    out += name + " " + format_number(value) + "\n";
+}
+
+/// 100 us to 10 s, three steps per decade.
+std::vector<double> latency_bounds() {
+    std::vector<double> bounds;
+    for (double decade = 1e-4; decade < 10; decade *= 10) {
+        for (double step : {1.0, 2.5, 5.0}) bounds.push_back(decade * step);
+    }
+    bounds.push_back(10);
+    return bounds;
+}
+
+}  // namespace
+
+Histogram::Histogram(std::vector<double> bounds)
+    : bounds_(std::move(bounds)), buckets_(bounds_.size() + 1) {}
+
+void Histogram::observe(double value) {
+    std::size_t i = 0;
+    while (i < bounds_.size() && value > bounds_[i]) ++i;
+    buckets_[i].fetch_add(1, std::memory_order_relaxed);
+    count_.fetch_add(1, std::memory_order_relaxed);
+    sum_.fetch_add(value, std::memory_order_relaxed);
+}
+
+void Histogram::render(std::string& out, const std::string& name) const {
+    std::uint64_t cumulative = 0;
+    for (std::size_t i = 0; i < buckets_.size(); ++i) {
+        cumulative += buckets_[i].load(std::memory_order_relaxed);
+        const std::string le = i < bounds_.size() ? format_number(bounds_[i]) : "+Inf";
+        out += name + "_bucket{le=\"" + le + "\"} " + std::to_string(cumulative) + "\n";
+    }
+    out += name + "_sum " + format_number(sum_.load(std::memory_order_relaxed)) + "\n";
+    out += name + "_count " + std::to_string(count()) + "\n";
+}
+
+Metrics::Metrics()
+    : first_mesh_seconds(latency_bounds()),
+      frame_latency_seconds(latency_bounds()),
+      slice_seconds(latency_bounds()) {}
+
+std::string Metrics::render() const {
+    std::string out;
+    auto gauge = [&](const char* name, const char* help, const Gauge& g) {
+        metric(out, std::string("isomesh_") + name, "gauge", help, static_cast<double>(g.value()));
+    };
+    auto counter = [&](const char* name, const char* help, const Counter& c) {
+        metric(out, std::string("isomesh_") + name + "_total", "counter", help,
+               static_cast<double>(c.value()));
+    };
+    auto histogram = [&](const char* name, const char* help, const Histogram& h) {
+        const std::string full = std::string("isomesh_") + name;
+        header(out, full, "histogram", help);
+        h.render(out, full);
+    };
+    gauge("connections", "Open WebSocket connections.", connections);
+    gauge("sessions", "Live meshing sessions.", sessions);
+    gauge("subscriptions", "Session subscriptions over all connections.", subscriptions);
+    gauge("queued_bytes", "Output bytes queued over all connections.", queued_bytes);
+    gauge("run_queue", "Sessions waiting for a worker.", run_queue);
+    gauge("busy_workers", "Workers running a refinement slice.", busy_workers);
+    gauge("worker_threads", "Refinement worker threads.", worker_threads);
+    gauge("splits_per_second", "Splits over the last second, all sessions.", splits_per_second);
+    counter("sessions_created", "Sessions created.", sessions_created);
+    counter("sessions_expired", "Sessions expired (idle or without subscribers).",
+            sessions_expired);
+    counter("splits", "Triangle bisections.", splits);
+    counter("merges", "Merges (undone splits).", merges);
+    counter("keyframes_sent", "Keyframes queued for sending.", keyframes_sent);
+    counter("deltas_sent", "Deltas queued for sending.", deltas_sent);
+    counter("deltas_dropped", "Deltas dropped for a slow connection (replaced by a keyframe).",
+            deltas_dropped);
+    counter("bytes_sent", "WebSocket payload bytes written.", bytes_sent);
+    counter("messages_received", "Control messages received.", messages_received);
+    counter("http_requests", "HTTP requests served.", http_requests);
+    header(out, "isomesh_errors_total", "counter", "Error replies by code.");
+    for (int i = 0; i < protocol::kErrorCodeCount; ++i) {
+        out += "isomesh_errors_total{code=\"" +
+               std::string(protocol::to_string(static_cast<protocol::ErrorCode>(i))) + "\"} " +
+               std::to_string(errors[i].value()) + "\n";
+    }
+    histogram("first_mesh_seconds", "From a create or update to its first mesh being queued.",
+              first_mesh_seconds);
+    histogram("frame_latency_seconds", "From a frame's creation to its last byte written.",
+              frame_latency_seconds);
+    histogram("slice_seconds", "One refinement turn of one session.", slice_seconds);
+    return out;
+}
+
+}  // namespace isomesh::server

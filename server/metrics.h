@@ -1,0 +1,85 @@
+// The server's metrics, exported at GET /metrics in the Prometheus text format (version 0.0.4):
+// lock-free counters, gauges and fixed-bucket histograms updated from any thread.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "protocol/errors.h"
+
+namespace isomesh::server {
+
+class Counter {
+  public:
+    void add(std::uint64_t n = 1) { value_.fetch_add(n, std::memory_order_relaxed); }
+    std::uint64_t value() const { return value_.load(std::memory_order_relaxed); }
+
+  private:
+    std::atomic<std::uint64_t> value_{0};
+};
+
+class Gauge {
+  public:
+    void add(std::int64_t n) { value_.fetch_add(n, std::memory_order_relaxed); }
+    void set(std::int64_t v) { value_.store(v, std::memory_order_relaxed); }
+    std::int64_t value() const { return value_.load(std::memory_order_relaxed); }
+
+  private:
+    std::atomic<std::int64_t> value_{0};
+};
+
+/// Observations counted in buckets with upper bounds `bounds` (ascending), plus +Inf.
+class Histogram {
+  public:
+    explicit Histogram(std::vector<double> bounds);
+    void observe(double value);
+    /// Prometheus lines for the metric `name` (with _bucket, _sum and _count).
+    void render(std::string& out, const std::string& name) const;
+    std::uint64_t count() const { return count_.load(std::memory_order_relaxed); }
+
+  private:
+    std::vector<double> bounds_;
+    std::vector<std::atomic<std::uint64_t>> buckets_;  // one per bound, then +Inf
+    std::atomic<std::uint64_t> count_{0};
+    std::atomic<double> sum_{0};
+};
+
+struct Metrics {
+    Metrics();
+
+    // gauges
+    Gauge connections;
+    Gauge sessions;
+    Gauge subscriptions;
+    Gauge queued_bytes;  ///< output bytes waiting in every connection's queue
+    Gauge run_queue;     ///< sessions waiting for a worker
+    Gauge busy_workers;  ///< workers running a session slice
+    Gauge worker_threads;
+    Gauge splits_per_second;  ///< over the last second, all sessions
+
+    // counters
+    Counter sessions_created;
+    Counter sessions_expired;
+    Counter splits;
+    Counter merges;
+    Counter keyframes_sent;
+    Counter deltas_sent;
+    Counter deltas_dropped;  ///< replaced by a keyframe (backpressure)
+    Counter bytes_sent;
+    Counter messages_received;
+    Counter http_requests;
+    std::array<Counter, protocol::kErrorCodeCount> errors;
+
+    // histograms, seconds
+    Histogram first_mesh_seconds;     ///< from a version's request to its keyframe being queued
+    Histogram frame_latency_seconds;  ///< from a frame's creation to its last byte written
+    Histogram slice_seconds;          ///< one refinement turn of one session
+
+    /// Every metric in the Prometheus text exposition format.
+    std::string render() const;
+};
+
+}  // namespace isomesh::server

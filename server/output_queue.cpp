@@ -1,0 +1,172 @@
+#include "server/output_queue.h"
+
+#include <algorithm>
+
+namespace isomesh::server {
+
+OutputQueue::OutputQueue(std::size_t budget_bytes, std::function<void()> wakeup, Metrics* metrics)
+    : budget_(budget_bytes), wakeup_(std::move(wakeup)), metrics_(metrics) {}
+
+OutputQueue::~OutputQueue() {
+    if (metrics_) metrics_->queued_bytes.add(-static_cast<std::int64_t>(queued_bytes_));
+}
+
+void OutputQueue::expect_keyframe(const protocol::SessionId& session) {
+    Lock lock(mutex_);
+    if (closed_) return;
+    drop_frames(lock, session);
+    streams_[session] = StreamState::awaiting;
+}
+
+void OutputQueue::forget(const protocol::SessionId& session, bool drop_queued) {
+    Lock lock(mutex_);
+    if (drop_queued) drop_frames(lock, session);
+    streams_.erase(session);
+}
+
+bool OutputQueue::push_keyframe(const protocol::SessionId& session,
+                                std::shared_ptr<const Bytes> frame, Clock::time_point created) {
+    Lock lock(mutex_);
+    auto stream = streams_.find(session);
+    if (closed_ || stream == streams_.end()) return false;
+    drop_frames(lock, session);
+    stream->second = StreamState::live;
+    enqueue(lock, {Outgoing::Kind::keyframe, nullptr, std::move(frame), session, created});
+    const bool wake = claim_writer(lock);
+    lock.unlock();
+    if (metrics_) metrics_->keyframes_sent.add();
+    notify(wake);
+    return true;
+}
+
+OutputQueue::DeltaOutcome OutputQueue::push_delta(const protocol::SessionId& session,
+                                                  std::shared_ptr<const Bytes> frame,
+                                                  Clock::time_point created) {
+    Lock lock(mutex_);
+    auto stream = streams_.find(session);
+    if (closed_ || stream == streams_.end()) return DeltaOutcome::dropped_unknown;
+    if (stream->second != StreamState::live) {
+        if (metrics_) metrics_->deltas_dropped.add();
+        return stream->second == StreamState::awaiting ? DeltaOutcome::dropped_awaiting
+                                                       : DeltaOutcome::dropped_stalled;
+    }
+    // An empty queue always takes one frame, however large: otherwise no write would ever
+    // complete to bring the stream back.
+    if (queued_bytes_ > 0 && queued_bytes_ + frame->size() > budget_) {
+        drop_frames(lock, session);
+        stream->second = StreamState::stalled;
+        if (metrics_) metrics_->deltas_dropped.add();
+        return DeltaOutcome::dropped_stalled;
+    }
+    enqueue(lock, {Outgoing::Kind::delta, nullptr, std::move(frame), session, created});
+    const bool wake = claim_writer(lock);
+    lock.unlock();
+    if (metrics_) metrics_->deltas_sent.add();
+    notify(wake);
+    return DeltaOutcome::queued;
+}
+
+void OutputQueue::push_text(std::shared_ptr<const std::string> text, bool droppable) {
+    Lock lock(mutex_);
+    if (closed_) return;
+    if (droppable && queued_bytes_ > 0 && queued_bytes_ + text->size() > budget_) return;
+    enqueue(lock, {Outgoing::Kind::text, std::move(text), nullptr, {}, Clock::now()});
+    if (queued_bytes_ > 2 * budget_) overflowed_ = true;
+    const bool wake = claim_writer(lock) || overflowed_;
+    lock.unlock();
+    notify(wake);
+}
+
+void OutputQueue::close() {
+    Lock lock(mutex_);
+    closed_ = true;
+    const std::size_t dropped = queued_bytes_ - in_flight_bytes_;
+    queue_.clear();
+    streams_.clear();
+    queued_bytes_ = in_flight_bytes_;
+    if (metrics_) metrics_->queued_bytes.add(-static_cast<std::int64_t>(dropped));
+}
+
+std::optional<Outgoing> OutputQueue::next() {
+    Lock lock(mutex_);
+    if (queue_.empty()) {
+        writer_busy_ = false;
+        return std::nullopt;
+    }
+    writer_busy_ = true;
+    Outgoing message = std::move(queue_.front());
+    queue_.pop_front();
+    in_flight_bytes_ = message.size();
+    return message;
+}
+
+std::vector<protocol::SessionId> OutputQueue::written() {
+    Lock lock(mutex_);
+    queued_bytes_ -= in_flight_bytes_;
+    if (metrics_) metrics_->queued_bytes.add(-static_cast<std::int64_t>(in_flight_bytes_));
+    in_flight_bytes_ = 0;
+    std::vector<protocol::SessionId> resume;
+    if (queued_bytes_ <= budget_ / 4) {
+        for (auto& [session, state] : streams_) {
+            if (state != StreamState::stalled) continue;
+            state = StreamState::awaiting;
+            resume.push_back(session);
+        }
+    }
+    return resume;
+}
+
+std::size_t OutputQueue::queued_bytes() const {
+    Lock lock(mutex_);
+    return queued_bytes_;
+}
+
+std::size_t OutputQueue::queued_messages() const {
+    Lock lock(mutex_);
+    return queue_.size();
+}
+
+std::optional<OutputQueue::StreamState> OutputQueue::stream_state(
+    const protocol::SessionId& session) const {
+    Lock lock(mutex_);
+    auto it = streams_.find(session);
+    if (it == streams_.end()) return std::nullopt;
+    return it->second;
+}
+
+bool OutputQueue::overflowed() const {
+    Lock lock(mutex_);
+    return overflowed_;
+}
+
+bool OutputQueue::claim_writer(const Lock&) {
+    if (writer_busy_) return false;
+    writer_busy_ = true;
+    return true;
+}
+
+void OutputQueue::enqueue(const Lock&, Outgoing message) {
+    queued_bytes_ += message.size();
+    if (metrics_) metrics_->queued_bytes.add(static_cast<std::int64_t>(message.size()));
+    queue_.push_back(std::move(message));
+}
+
+void OutputQueue::drop_frames(const Lock&, const protocol::SessionId& session) {
+    auto dropped = std::stable_partition(queue_.begin(), queue_.end(), [&](const Outgoing& m) {
+        return !(m.binary() && m.session == session);
+    });
+    std::size_t bytes = 0;
+    for (auto it = dropped; it != queue_.end(); ++it) {
+        bytes += it->size();
+        if (metrics_ && it->kind == Outgoing::Kind::delta) metrics_->deltas_dropped.add();
+    }
+    queue_.erase(dropped, queue_.end());
+    queued_bytes_ -= bytes;
+    if (metrics_) metrics_->queued_bytes.add(-static_cast<std::int64_t>(bytes));
+}
+
+void OutputQueue::notify(bool wake) {
+    if (wake && wakeup_) wakeup_();
+}
+
+}  // namespace isomesh::server

@@ -1,0 +1,75 @@
+// A session's mesh as its subscribers hold it, kept by the server to write frames.
+//
+// The refiner numbers triangles with ids of its own (a merge brings a triangle back under its old
+// id); on the wire a delta's added triangles get fresh ids, base + decoded index (PROTOCOL.md), so
+// this mirror maps each live refiner triangle to its wire id.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <unordered_map>
+#include <vector>
+
+#include "mesh/mesh.h"
+#include "protocol/mesh_codec.h"
+#include "refine/mesh_delta.h"
+
+namespace isomesh::server {
+
+/// The contents of one delta frame, before encoding.
+struct WireDelta {
+    std::vector<std::uint64_t> removed;  ///< wire ids, ascending
+    /// Vertices that moved (after a function change) and are used by no added triangle: a client
+    /// still holds them after the removals. Moved vertices that added triangles use travel with
+    /// them in `vertices`, with their new values.
+    std::vector<protocol::Vertex> moved;
+    std::vector<protocol::Vertex> vertices;     ///< every vertex the added triangles use
+    std::vector<protocol::Triangle> triangles;  ///< added
+    std::vector<std::uint32_t> refiner_ids;     ///< refiner id of each added triangle
+    bool empty() const { return removed.empty() && moved.empty() && triangles.empty(); }
+};
+
+/// The contents of a keyframe: the whole mesh, triangles in ascending wire id order.
+struct KeyframeContent {
+    std::vector<protocol::Vertex> vertices;
+    std::vector<protocol::Triangle> triangles;
+    std::vector<std::uint64_t> wire_ids;
+};
+
+class WireMesh {
+  public:
+    /// Replaces everything by `mesh`, whose triangle i has refiner id triangle_ids[i] and vertex v
+    /// vertex id vertex_ids[v]; wire ids are assigned from next_wire_id() on, in triangle order.
+    void reset(const Mesh& mesh, std::span<const std::uint32_t> triangle_ids,
+               std::span<const std::uint32_t> vertex_ids);
+
+    /// Applies a refiner delta and returns what the frame must carry. The added triangles get
+    /// their wire ids from commit_wire_ids once the frame is encoded.
+    /// Precondition: `delta` applies to this mesh (DeltaMesh::apply would succeed).
+    WireDelta apply(const MeshDelta& delta);
+
+    /// Records the wire ids the encoder gave to the triangles of the last apply() (wire_ids[i]
+    /// for content.refiner_ids[i]) and advances next_wire_id() past them.
+    void commit_wire_ids(std::span<const std::uint32_t> refiner_ids,
+                         std::span<const std::uint64_t> wire_ids);
+
+    KeyframeContent keyframe() const;
+
+    std::uint64_t next_wire_id() const { return next_wire_id_; }
+    std::size_t triangle_count() const { return triangles_.size(); }
+    std::size_t vertex_count() const { return vertices_.size(); }
+
+  private:
+    struct LiveTriangle {
+        std::array<std::uint32_t, 3> vertices;
+        std::uint64_t wire_id;
+    };
+    static constexpr std::uint64_t kUnassigned = ~std::uint64_t{0};
+
+    std::unordered_map<std::uint32_t, LiveTriangle> triangles_;  // by refiner id
+    std::unordered_map<std::uint32_t, protocol::Vertex> vertices_;
+    std::uint64_t next_wire_id_ = 0;
+};
+
+}  // namespace isomesh::server
