@@ -7,10 +7,10 @@
 #include <string_view>
 #include <vector>
 
+#include "../../expr/tape_interpreter.h"
 #include "expr/compile.h"
 #include "expr/utf8.h"
 #include "expr/vm_reader.h"
-#include "tape/op_math.h"
 
 namespace {
 
@@ -27,25 +27,14 @@ bool is_valid_utf8(std::string_view text) {
     return true;
 }
 
-/// Runs the tape once, so that operations on odd values (PowInt exponents, parameter indices)
-/// are exercised under the sanitizers.
-double run(const isomesh::Tape& tape) {
-    std::vector<double> slots(tape.size());
-    for (std::size_t n = 0; n < tape.size(); ++n) {
-        const isomesh::Instruction& i = tape.code[n];
-        int arity = isomesh::op_arity(i.op);
-        if (arity == 0) slots[n] = i.op == isomesh::Op::Const ? i.imm : 0.5;
-        if (arity == 1) slots[n] = isomesh::apply_unary(i.op, slots[i.a], i.imm);
-        if (arity == 2) slots[n] = isomesh::apply_binary(i.op, slots[i.a], slots[i.b]);
-    }
-    return slots.back();
-}
-
 void check(const isomesh::CompileResult& result, const isomesh::CompileLimits& limits) {
     if (result.ok()) {
         require(result.tape.validate().empty());
         require(result.tape.size() <= limits.max_instructions);
-        (void)run(result.tape);
+        // Run the tape once, so operations on odd values (PowInt exponents, parameter indices)
+        // are exercised under the sanitizers.
+        std::vector<double> params(result.tape.params.size(), 0.5);
+        (void)isomesh::testing::interpret(result.tape, 0.5, -0.25, 2.0, params);
     } else {
         require(!result.error->message.empty() && result.tape.code.empty());
         require(is_valid_utf8(result.error->to_string()));
