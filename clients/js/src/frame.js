@@ -28,7 +28,7 @@ import { MAX_TRIANGLE_ID, decodeIdSequence, decodeSortedIds } from './varint.js'
 
 export const FRAME_HEADER_BYTES = 76;
 /** Most triangles, added or removed, in one frame. */
-export const MAX_FRAME_TRIANGLES = 2 ** 24;
+export const MAX_FRAME_TRIANGLES = 2 ** 22;
 export const FRAME_FLAG_CONVERGED = 1;
 export const FRAME_FLAG_CATCH_UP = 2;
 
@@ -75,7 +75,7 @@ export function readFrameHeader(bytes) {
 function checkHeader(h) {
   if (h.functionVersion === 0) throw frameError('function version 0');
   if (h.removedCount > MAX_FRAME_TRIANGLES || h.triangleCount > MAX_FRAME_TRIANGLES) {
-    throw frameError('more than 2^24 triangles in one frame');
+    throw frameError('more than 2^22 triangles in one frame');
   }
   if (h.kind === 'keyframe' && h.removedCount > 0) throw frameError('a keyframe removes nothing');
   if ((h.triangleCount === 0) !== (h.meshBytes === 0)) {
