@@ -8,7 +8,7 @@
 
 import { connect } from 'isomesh-client';
 
-import { parameterNames, valuesFor } from './parameters.js';
+import { missingParameters, parameterNames, valuesFor } from './parameters.js';
 
 const RECONNECT_MS = [500, 1000, 2000, 5000, 10000];
 
@@ -97,13 +97,21 @@ export class App {
   async #createSession() {
     const { expression, parameters, box, constraints } = this.wanted;
     this.#setStatus('meshing');
-    const names = parameterNames(expression);
-    try {
-      this.session = await this.client.create({ expression, parameters: valuesFor(names, parameters), box, constraints });
-    } catch (error) {
-      this.session = null;
-      this.#requestFailed(error, { expression });
-      return;
+    let names = parameterNames(expression);
+    for (let attempt = 0; ; ++attempt) {
+      try {
+        this.session = await this.client.create({ expression, parameters: valuesFor(names, parameters), box, constraints });
+        break;
+      } catch (error) {
+        const missing = missingParameters(error).filter((name) => !names.includes(name));
+        if (attempt === 0 && missing.length > 0) {
+          names = [...names, ...missing];
+          continue;
+        }
+        this.session = null;
+        this.#requestFailed(error, { expression });
+        return;
+      }
     }
     this.panel.clearError();
     this.lastError = null;
@@ -161,7 +169,12 @@ export class App {
       }
       this.#applyState(state);
     } catch (error) {
-      this.#requestFailed(error, fields);
+      const missing = missingParameters(error).filter((name) => !(name in (fields.parameters ?? {})));
+      if (fields.expression !== undefined && missing.length > 0) {
+        this.#change({ ...fields, parameters: { ...fields.parameters, ...valuesFor(missing, this.wanted.parameters) } });
+      } else {
+        this.#requestFailed(error, fields);
+      }
     } finally {
       this.inFlight = false;
     }
