@@ -18,10 +18,6 @@ double first_order_distance(Evaluator& evaluator, const glm::dvec3& p) {
     return std::isfinite(d) ? d : 0.0;
 }
 
-double area(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
-    return 0.5 * glm::length(glm::cross(b - a, c - a));
-}
-
 double squared_length(const glm::dvec3& v) {
     return glm::dot(v, v);
 }
@@ -34,23 +30,30 @@ double epsilon4_error(const TriangleGeometry& t) {
     return std::isfinite(volume) ? volume : 0.0;
 }
 
-double DistanceError::triangle_error(Evaluator& evaluator, const TriangleGeometry& t) const {
+double largest_sample_distance(Evaluator& evaluator, const TriangleGeometry& t) {
     double distance = glm::length(t.projected_midpoint - 0.5 * (t.a + t.b));
     distance = std::max(distance, first_order_distance(evaluator, (t.a + t.b + t.c) / 3.0));
     distance = std::max(distance, first_order_distance(evaluator, 0.5 * (t.b + t.c)));
     distance = std::max(distance, first_order_distance(evaluator, 0.5 * (t.c + t.a)));
-    const double error = area(t.a, t.b, t.c) * distance;
+    return std::isfinite(distance) ? distance : 0.0;
+}
+
+double DistanceError::triangle_error(Evaluator& evaluator, const TriangleGeometry& t) const {
+    const double longest = std::sqrt(std::max(
+        {squared_length(t.b - t.a), squared_length(t.c - t.b), squared_length(t.a - t.c)}));
+    const double error = largest_sample_distance(evaluator, t) * longest;
     return std::isfinite(error) ? error : 0.0;
 }
 
 std::shared_ptr<const ErrorMeasure> make_error_measure(std::string_view name) {
-    if (name == "epsilon4") return std::make_shared<Epsilon4Error>();
     if (name == "distance") return std::make_shared<DistanceError>();
+    if (name == "epsilon4") return std::make_shared<Epsilon4Error>();
+    if (name == "max_distance") return std::make_shared<MaxDistanceError>();
     return nullptr;
 }
 
 std::vector<std::string> error_measure_names() {
-    return {"epsilon4", "distance"};
+    return {"distance", "epsilon4", "max_distance"};
 }
 
 MeshErrorReport measure_mesh_error(const Mesh& mesh, Evaluator& evaluator, int samples_per_edge,

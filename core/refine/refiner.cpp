@@ -199,7 +199,7 @@ class Refiner::Impl {
     Impl(std::shared_ptr<const Field> field, const Mesh& first_mesh, RefineSettings settings)
         : settings_(std::move(settings)), constraint_(settings_.constraint) {
         if (!field) throw std::invalid_argument("Refiner: null field");
-        if (!settings_.error_measure) settings_.error_measure = std::make_shared<Epsilon4Error>();
+        if (!settings_.error_measure) settings_.error_measure = std::make_shared<DistanceError>();
         if (!(settings_.swap_ratio > 1.0))
             throw std::invalid_argument("Refiner: swap_ratio must be > 1");
         field_ = std::move(field);

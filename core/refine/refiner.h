@@ -46,7 +46,7 @@
 namespace isomesh {
 
 struct RefineSettings {
-    /// The split priority; nullptr means epsilon4 (see error_measures.h for why).
+    /// The split priority; nullptr means "distance" (see error_measures.h for why).
     std::shared_ptr<const ErrorMeasure> error_measure;
     /// When to stop; can be changed later with set_constraint. The default never refines.
     Constraint constraint;

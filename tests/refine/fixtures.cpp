@@ -6,6 +6,9 @@
 
 #include <glm/geometric.hpp>
 
+#include "eval/tape_field.h"
+#include "expr/compile.h"
+#include "expr/parameters.h"
 #include "mesh/topology.h"
 
 namespace isomesh::test {
@@ -133,6 +136,15 @@ std::shared_ptr<const Field> make_sphere_field(const glm::dvec3& center, double 
              const double l = glm::length(d);
              return l > 0.0 ? d / l : glm::dvec3(0.0);
          }});
+}
+
+std::shared_ptr<const Field> compile_field(
+    const std::string& text, const std::map<std::string, double, std::less<>>& params) {
+    CompileResult compiled = compile_expression(text);
+    if (!compiled.ok()) throw std::invalid_argument(compiled.error->to_string());
+    const ParameterBinding binding = bind_parameters(compiled.tape, params);
+    if (!binding.ok()) throw std::invalid_argument(*binding.error);
+    return make_tape_field(std::make_shared<const Tape>(std::move(compiled.tape)), binding.values);
 }
 
 Mesh cube_sphere_mesh(const Field& field, int n) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 
@@ -24,6 +25,9 @@ std::shared_ptr<const Field> make_analytic_field(AnalyticFunction function);
 std::shared_ptr<const Field> make_quadric_field(const glm::dvec3& k, double c);
 /// The sphere |p - center| - radius (a signed distance).
 std::shared_ptr<const Field> make_sphere_field(const glm::dvec3& center, double radius);
+/// The compiled expression `text` (expr/compile.h) with its parameters bound; throws on errors.
+std::shared_ptr<const Field> compile_field(
+    const std::string& text, const std::map<std::string, double, std::less<>>& params = {});
 
 /// A closed starting mesh of a star-shaped surface around the origin: the cube [-1,1]^3 with
 /// `n` x `n` quads per face, two triangles each, every vertex moved along its ray onto f = 0

@@ -67,7 +67,9 @@ TEST(RefinerVersions, fifty_parameter_changes_end_like_a_fresh_mesh) {
                 r1.epsilon4_total, r1.max_distance, r2.epsilon4_total, r2.max_distance);
     EXPECT_NEAR(r1.epsilon4_total, r2.epsilon4_total, 0.1 * r2.epsilon4_total);
     EXPECT_NEAR(r1.max_distance, r2.max_distance, 0.25 * r2.max_distance);
-    EXPECT_NEAR(refiner.stats().total_error, r1.epsilon4_total, 0.1 * r1.epsilon4_total);
+    EXPECT_NEAR(refiner.stats().total_error, fresh.stats().total_error,
+                0.1 * fresh.stats().total_error);
+    EXPECT_NEAR(refiner.stats().max_error, fresh.stats().max_error, 0.25 * fresh.stats().max_error);
 
     // The client's copy, updated by deltas only, ends identical.
     std::string error;

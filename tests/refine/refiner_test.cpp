@@ -173,6 +173,7 @@ TEST(Refiner, lowering_a_budget_coarsens_and_raising_it_refines_again) {
 TEST(Refiner, error_bounds_refine_and_raised_bounds_coarsen) {
     auto field = spheroid();
     RefineSettings s;
+    s.error_measure = make_error_measure("epsilon4");
     s.constraint = Constraint::max_error(1e-4) && Constraint::triangle_budget(200000);
     Refiner refiner(field, test::cube_sphere_mesh(*field, 3), s);
     refiner.run_to_convergence();
@@ -194,7 +195,9 @@ TEST(Refiner, error_bounds_refine_and_raised_bounds_coarsen) {
 
 TEST(Refiner, statistics_match_a_recount) {
     auto field = spheroid();
-    Refiner refiner(field, test::cube_sphere_mesh(*field, 3), budget_settings(3000));
+    RefineSettings settings = budget_settings(3000);
+    settings.error_measure = make_error_measure("epsilon4");
+    Refiner refiner(field, test::cube_sphere_mesh(*field, 3), settings);
     refiner.run_to_convergence();
     refiner.set_constraint(Constraint::triangle_budget(1000));
     refiner.run_to_convergence();
