@@ -12,4 +12,8 @@ namespace isomesh::cli {
 /// `isomesh eval EXPR (--at x,y,z | --box x0,x1,y0,y1,z0,z1) [--param NAME=VALUE]...`
 int run_eval(std::span<const std::string_view> args);
 
+/// `isomesh mesh EXPR -o FILE [--param NAME=VALUE]... [--box ...] [--depth MIN,MAX]
+/// [--threads N] [--stats]`
+int run_mesh(std::span<const std::string_view> args);
+
 }  // namespace isomesh::cli

@@ -12,11 +12,16 @@ namespace isomesh::cli {
 
 namespace {
 
-/// The error, then for a one-line expression the expression and a caret under the column.
+/// The error (after the file name for an error inside a model file), then for a one-line
+/// expression the expression and a caret under the column.
 void print_compile_error(std::string_view source, const CompileError& error) {
-    bool show_caret = !source.starts_with('@') && !error.multiline && error.column > 0;
+    bool from_file = source.starts_with('@');
+    if (from_file && error.multiline) {
+        print_error(std::string(source.substr(1)) + ": " + error.to_string());
+        return;
+    }
     print_error(error.to_string());
-    if (!show_caret) return;
+    if (from_file || error.multiline || error.column <= 0) return;
     std::string caret(static_cast<std::size_t>(error.column - 1), ' ');
     std::fprintf(stderr, "  %.*s\n  %s^\n", static_cast<int>(source.size()), source.data(),
                  caret.c_str());

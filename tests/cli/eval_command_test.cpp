@@ -23,6 +23,14 @@ std::string read_text(const std::filesystem::path& path) {
     return text.str();
 }
 
+/// The parts one after the other. (Also keeps GCC 12's -Wrestrict false positive on
+/// `"literal" + std::string` away.)
+std::string joined(std::initializer_list<std::string_view> parts) {
+    std::string text;
+    for (std::string_view part : parts) text.append(part);
+    return text;
+}
+
 /// Single-quotes an argument for /bin/sh.
 std::string shell_quote(std::string_view arg) {
     std::string quoted = "'";
@@ -94,7 +102,7 @@ TEST(EvalCommand, box_prints_interval_and_flags) {
 }
 
 TEST(EvalCommand, reads_vm_files) {
-    std::string model = std::string("@" ISOMESH_SHARED_DIR) + "/testdata/vm/tanglecube.vm";
+    std::string model = joined({"@", ISOMESH_SHARED_DIR, "/testdata/vm/tanglecube.vm"});
     nlohmann::json out = single_json_line(isomesh({"eval", model, "--at", "0,0,0"}));
     EXPECT_DOUBLE_EQ(out["value"].get<double>(), 10.0);
 }
@@ -104,6 +112,17 @@ TEST(EvalCommand, compile_errors_exit_1_with_position) {
     EXPECT_EQ(run.status, 1);
     EXPECT_TRUE(run.out.empty());
     EXPECT_EQ(run.err, "isomesh: unexpected ')' at column 4\n  x+1)\n     ^\n");
+}
+
+TEST(EvalCommand, vm_errors_name_file_and_line) {
+    auto path = std::filesystem::temp_directory_path() /
+                ("isomesh_cli_test_bad_" + std::to_string(::getpid()) + ".vm");
+    std::ofstream(path) << "_x var-x\n_y frob _x\n";
+    CliRun run = isomesh({"eval", joined({"@", path.string()}), "--at", "0,0,0"});
+    std::filesystem::remove(path);
+    EXPECT_EQ(run.status, 1);
+    EXPECT_EQ(run.err,
+              "isomesh: " + path.string() + ": unknown opcode 'frob' at line 2, column 4\n");
 }
 
 TEST(EvalCommand, missing_parameters_exit_1_and_unused_warn) {
