@@ -121,8 +121,8 @@ TEST(EvalCommand, vm_errors_name_file_and_line) {
     CliRun run = isomesh({"eval", joined({"@", path.string()}), "--at", "0,0,0"});
     std::filesystem::remove(path);
     EXPECT_EQ(run.status, 1);
-    EXPECT_EQ(run.err,
-              "isomesh: " + path.string() + ": unknown opcode 'frob' at line 2, column 4\n");
+    EXPECT_EQ(run.err, joined({"isomesh: ", path.string(),
+                               ": unknown opcode 'frob' at line 2, column 4\n"}));
 }
 
 TEST(EvalCommand, missing_parameters_exit_1_and_unused_warn) {
