@@ -48,7 +48,7 @@ Result<std::vector<std::uint64_t>> sorted_distinct(std::span<const std::uint64_t
 
 std::optional<Error> check_frame_count(std::size_t count, const char* what) {
     if (count > kMaxFrameTriangles) {
-        return field_error(std::string("more than 2^24 ") + what + " triangles in one frame");
+        return field_error(std::string("more than 2^22 ") + what + " triangles in one frame");
     }
     return std::nullopt;
 }
@@ -64,18 +64,23 @@ FrameHeader header_for(const FrameInfo& info) {
     return header;
 }
 
-std::vector<std::uint8_t> assemble(FrameHeader header, const std::vector<std::uint8_t>& removed,
-                                   const std::vector<std::uint8_t>& triangle_ids,
-                                   const EncodedMesh& mesh) {
-    header.removed_bytes = static_cast<std::uint32_t>(removed.size());
-    header.triangle_ids_bytes = static_cast<std::uint32_t>(triangle_ids.size());
-    header.mesh_bytes = static_cast<std::uint32_t>(mesh.bytes.size());
-    header.point_count = mesh.point_count;
+/// The encoded sections of a frame, in frame order.
+struct Sections {
+    std::vector<std::uint8_t> removed;
+    std::vector<std::uint8_t> triangle_ids;
+    EncodedMesh mesh;
+};
+
+std::vector<std::uint8_t> assemble(FrameHeader header, const Sections& s) {
+    header.removed_bytes = static_cast<std::uint32_t>(s.removed.size());
+    header.triangle_ids_bytes = static_cast<std::uint32_t>(s.triangle_ids.size());
+    header.mesh_bytes = static_cast<std::uint32_t>(s.mesh.bytes.size());
+    header.point_count = s.mesh.point_count;
     std::vector<std::uint8_t> frame(kFrameHeaderBytes);
     write_frame_header(header, std::span<std::uint8_t, kFrameHeaderBytes>(frame));
-    frame.insert(frame.end(), removed.begin(), removed.end());
-    frame.insert(frame.end(), triangle_ids.begin(), triangle_ids.end());
-    frame.insert(frame.end(), mesh.bytes.begin(), mesh.bytes.end());
+    for (const auto* bytes : {&s.removed, &s.triangle_ids, &s.mesh.bytes}) {
+        frame.insert(frame.end(), bytes->begin(), bytes->end());
+    }
     return frame;
 }
 
@@ -160,7 +165,7 @@ Result<FrameHeader> read_frame_header(std::span<const std::uint8_t> in) {
 
     if (h.function_version == 0) return frame_error("function version 0");
     if (h.removed_count > kMaxFrameTriangles || h.triangle_count > kMaxFrameTriangles) {
-        return frame_error("more than 2^24 triangles in one frame");
+        return frame_error("more than 2^22 triangles in one frame");
     }
     if (h.kind == FrameKind::keyframe && h.removed_count > 0) {
         return frame_error("a keyframe removes nothing");
@@ -180,32 +185,35 @@ Result<FrameHeader> read_frame_header(std::span<const std::uint8_t> in) {
     return h;
 }
 
-Result<EncodedFrame> encode_delta(const FrameInfo& info, std::span<const std::uint64_t> removed,
-                                  std::span<const Vertex> vertices,
-                                  std::span<const Triangle> triangles,
-                                  std::uint64_t base_triangle_id, const MeshEncoding& encoding) {
+Result<EncodedFrame> encode_delta(const FrameInfo& info, const DeltaContent& content,
+                                  const MeshEncoding& encoding) {
     assert(info.kind == FrameKind::delta);
-    if (auto error = check_frame_count(removed.size(), "removed")) return *error;
+    const auto& triangles = content.triangles;
+    const std::uint64_t base = content.base_triangle_id;
+    if (auto error = check_frame_count(content.removed.size(), "removed")) return *error;
     if (auto error = check_frame_count(triangles.size(), "added")) return *error;
-    if (!triangles.empty() && (base_triangle_id > kMaxTriangleId ||
-                               triangles.size() - 1 > kMaxTriangleId - base_triangle_id)) {
+    if (!triangles.empty() &&
+        (base > kMaxTriangleId || triangles.size() - 1 > kMaxTriangleId - base)) {
         return field_error("added triangle ids would exceed 2^53 - 1");
     }
-    auto sorted_removed = sorted_distinct(removed, "removed");
+    auto sorted_removed = sorted_distinct(content.removed, "removed");
     if (!sorted_removed) return sorted_removed.error();
-    auto mesh = encode_if_any(vertices, triangles, encoding);
+    Sections sections;
+    sections.removed = encode_sorted_ids(sorted_removed.value());
+    auto mesh = encode_if_any(content.vertices, triangles, encoding);
     if (!mesh) return mesh.error();
+    sections.mesh = std::move(mesh.value());
 
     FrameHeader header = header_for(info);
-    header.base_triangle_id = base_triangle_id;
-    header.removed_count = static_cast<std::uint32_t>(removed.size());
+    header.base_triangle_id = base;
+    header.removed_count = static_cast<std::uint32_t>(content.removed.size());
     header.triangle_count = static_cast<std::uint32_t>(triangles.size());
     EncodedFrame out;
-    out.bytes = assemble(header, encode_sorted_ids(sorted_removed.value()), {}, mesh.value());
     out.triangle_ids.resize(triangles.size());
     for (std::size_t i = 0; i < triangles.size(); ++i) {
-        out.triangle_ids[i] = base_triangle_id + mesh.value().decoded_index[i];
+        out.triangle_ids[i] = base + sections.mesh.decoded_index[i];
     }
+    out.bytes = assemble(header, sections);
     return out;
 }
 
@@ -232,14 +240,15 @@ Result<EncodedFrame> encode_keyframe(const FrameInfo& info, std::span<const Vert
         std::adjacent_find(ids_in_decoded_order.begin(), ids_in_decoded_order.end(),
                            [](std::uint64_t a, std::uint64_t b) { return b != a + 1; }) ==
         ids_in_decoded_order.end();
-    std::vector<std::uint8_t> explicit_ids;
+    Sections sections;
     if (consecutive && !triangles.empty()) {
         header.base_triangle_id = ids_in_decoded_order.front();
     } else {
-        explicit_ids = encode_id_sequence(ids_in_decoded_order, 0);
+        sections.triangle_ids = encode_id_sequence(ids_in_decoded_order, 0);
     }
+    sections.mesh = std::move(mesh.value());
     EncodedFrame out;
-    out.bytes = assemble(header, {}, explicit_ids, mesh.value());
+    out.bytes = assemble(header, sections);
     out.triangle_ids.assign(triangle_ids.begin(), triangle_ids.end());
     return out;
 }

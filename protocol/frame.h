@@ -3,6 +3,8 @@
 // A frame is a fixed 76-byte little-endian header, then three sections whose lengths the header
 // gives: removed triangle ids (sorted, delta-coded varints), explicit triangle ids (optional,
 // zigzag delta-coded varints), and the mesh payload of added triangles (Draco, mesh_codec.h).
+// Vertices that move (a new function version) travel with re-sent triangles: a delta removes the
+// triangles around them and adds them again, and a vertex id a client knows takes the new values.
 //
 //   offset size field
 //        0    4 magic "ISOM"
@@ -36,8 +38,8 @@ inline constexpr std::size_t kFrameHeaderBytes = 76;
 inline constexpr std::array<std::uint8_t, 4> kFrameMagic = {'I', 'S', 'O', 'M'};
 /// Triangle ids stay below 2^53 so that JavaScript clients can hold them in Numbers.
 inline constexpr std::uint64_t kMaxTriangleId = (std::uint64_t{1} << 53) - 1;
-/// Most triangles (added or removed) in one frame.
-inline constexpr std::uint32_t kMaxFrameTriangles = 1u << 24;
+/// Most triangles (added or removed) in one frame: bounds what a decoder allocates.
+inline constexpr std::uint32_t kMaxFrameTriangles = 1u << 22;
 
 enum class FrameKind : std::uint8_t { keyframe = 1, delta = 2 };
 
@@ -88,13 +90,19 @@ struct EncodedFrame {
     std::vector<std::uint64_t> triangle_ids;
 };
 
-/// A delta: `removed` (any order, distinct, each <= kMaxTriangleId) then `triangles` added, which
-/// get the ids base_triangle_id + decoded index. Preconditions: info.kind == delta and
-/// base_triangle_id + triangles.size() - 1 <= kMaxTriangleId. Fails (bad_field) on invalid input.
-Result<EncodedFrame> encode_delta(const FrameInfo& info, std::span<const std::uint64_t> removed,
-                                  std::span<const Vertex> vertices,
-                                  std::span<const Triangle> triangles,
-                                  std::uint64_t base_triangle_id, const MeshEncoding& encoding);
+/// What a delta changes, applied in this order: triangles removed, then triangles added with the
+/// vertices they use.
+struct DeltaContent {
+    std::span<const std::uint64_t> removed;  ///< any order, distinct, each <= kMaxTriangleId
+    std::span<const Vertex> vertices;        ///< every vertex `triangles` use (extra ones ignored)
+    std::span<const Triangle> triangles;     ///< get the ids base_triangle_id + decoded index
+    std::uint64_t base_triangle_id = 0;
+};
+
+/// Precondition: info.kind == delta. Fails (bad_field) on invalid content, e.g. added ids that
+/// would pass kMaxTriangleId.
+Result<EncodedFrame> encode_delta(const FrameInfo& info, const DeltaContent& content,
+                                  const MeshEncoding& encoding);
 
 /// A keyframe: the whole mesh, each triangle keeping its id (`triangle_ids[i]` for triangles[i],
 /// distinct, each <= kMaxTriangleId). Precondition: info.kind == keyframe.

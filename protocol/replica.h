@@ -1,8 +1,8 @@
 // A client's copy of one session's mesh, kept by applying decoded frames in order (PROTOCOL.md,
 // "Applying frames"): a keyframe replaces everything; a delta with the next sequence number removes
-// its triangles, then adds its vertices (a known id takes the new values) and triangles; stale
-// deltas are skipped; a gap or an inconsistent delta stops the replica until the next keyframe,
-// which the client asks for with `resync`.
+// its triangles, then adds its vertices (a known id takes the new values: that is how vertices
+// move) and triangles; stale deltas are skipped; a gap or an inconsistent delta stops the replica
+// until the next keyframe, which the client asks for with `resync`.
 #pragma once
 
 #include <cstdint>

@@ -7,6 +7,7 @@
 //   isomesh-protocol-sample messages DIR writes one sample of every control message as
 //                                        DIR/<type>.json
 //   isomesh-protocol-sample stats        prints bytes per triangle of deltas of several sizes
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -46,13 +47,17 @@ ordered_json triangles_json(const std::vector<FrameTriangle>& triangles) {
     return out;
 }
 
-ordered_json frame_json(const std::string& file, const DecodedFrame& frame) {
-    const FrameHeader& h = frame.header;
-    ordered_json vertices = ordered_json::array();
-    for (const Vertex& v : frame.vertices) {
-        vertices.push_back(
+ordered_json vertices_json(const std::vector<Vertex>& vertices) {
+    ordered_json out = ordered_json::array();
+    for (const Vertex& v : vertices) {
+        out.push_back(
             {v.id, v.position.x, v.position.y, v.position.z, v.normal.x, v.normal.y, v.normal.z});
     }
+    return out;
+}
+
+ordered_json frame_json(const std::string& file, const DecodedFrame& frame) {
+    const FrameHeader& h = frame.header;
     return {{"file", file},
             {"kind", h.kind == FrameKind::keyframe ? "keyframe" : "delta"},
             {"flags", h.flags},
@@ -61,7 +66,7 @@ ordered_json frame_json(const std::string& file, const DecodedFrame& frame) {
             {"timestamp_us", h.timestamp_us},
             {"function_version", h.function_version},
             {"removed", frame.removed},
-            {"vertices", vertices},
+            {"vertices", vertices_json(frame.vertices)},
             {"triangles", triangles_json(frame.triangles)}};
 }
 
@@ -84,7 +89,12 @@ int write_frames(const fs::path& dir) {
         return std::fprintf(stderr, "replica differs from the sender's mesh\n"), 1;
     }
     manifest["final_triangles"] = triangles_json(session.final_triangles);
-    write_text(dir / "frames.json", manifest.dump(1));
+    std::vector<Vertex> final_vertices;
+    for (const auto& [id, vertex] : replica.vertices()) final_vertices.push_back(vertex);
+    std::sort(final_vertices.begin(), final_vertices.end(),
+              [](const Vertex& a, const Vertex& b) { return a.id < b.id; });
+    manifest["final_vertices"] = vertices_json(final_vertices);
+    write_text(dir / "frames.json", manifest.dump());
     std::printf("wrote %zu frames to %s\n", session.frames.size(), dir.c_str());
     return 0;
 }
@@ -152,7 +162,7 @@ Measure measure_split_delta(const samples::SampleMesh& sphere, std::size_t count
     all.insert(all.end(), split.vertices.begin(), split.vertices.end());
     std::vector<std::uint64_t> removed(chosen.begin(), chosen.end());
     FrameInfo info{FrameKind::delta, 0, samples::sample_session_id(), 1, kSampleTime, 1};
-    auto frame = encode_delta(info, removed, all, split.triangles, 1 << 20, encoding);
+    auto frame = encode_delta(info, {removed, all, split.triangles, 1 << 20}, encoding);
     if (!frame) return {};
     const auto header = read_frame_header(frame.value().bytes);
     return {split.triangles.size(), frame.value().bytes.size(), header.value().mesh_bytes};

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <map>
 #include <numeric>
+#include <set>
 
 #include <glm/geometric.hpp>
 
@@ -210,17 +211,44 @@ SampleSession refining_sphere_session() {
         ++info.sequence;
         info.timestamp_us += 20'000;
         auto delta = expect_ok(
-            encode_delta(info, removed, all, split.triangles, next_triangle_id, encoding));
+            encode_delta(info, {removed, all, split.triangles, next_triangle_id}, encoding));
         session.frames.push_back(delta.bytes);
         next_triangle_id += split.triangles.size();
         sender.apply_split(chosen, std::move(split), delta.triangle_ids);
     }
+    // A function change moves the vertices of a cap outward by 2%: the triangles around them
+    // are removed and added again (new ids), carrying the vertices' new values.
+    std::set<std::uint32_t> moved_ids;
+    for (std::size_t t : cap(sender.mesh, {0, 0, -1}, 20)) {
+        for (std::uint32_t v : sender.mesh.triangles[t].vertices) moved_ids.insert(v);
+    }
+    for (std::uint32_t v : moved_ids) sender.mesh.vertices[v].position *= 1.02f;  // id == index
+    std::vector<std::size_t> touched;
+    for (std::size_t t = 0; t < sender.mesh.triangles.size(); ++t) {
+        const auto& corners = sender.mesh.triangles[t].vertices;
+        if (std::any_of(corners.begin(), corners.end(),
+                        [&](std::uint32_t v) { return moved_ids.contains(v); })) {
+            touched.push_back(t);
+        }
+    }
+    std::vector<std::uint64_t> replaced;
+    for (std::size_t t : touched) replaced.push_back(sender.ids[t]);
+    Subdivision same{{}, pick(sender.mesh, touched)};
+    ++info.sequence;
+    ++info.function_version;
+    info.timestamp_us += 20'000;
+    auto move = expect_ok(encode_delta(
+        info, {replaced, sender.mesh.vertices, same.triangles, next_triangle_id}, encoding));
+    session.frames.push_back(move.bytes);
+    next_triangle_id += same.triangles.size();
+    sender.apply_split(touched, std::move(same), move.triangle_ids);
+
     ++info.sequence;
     info.flags = frame_flags::converged;
     const std::vector<std::size_t> dropped = {3, 5, sender.ids.size() - 1};
     std::vector<std::uint64_t> removed;
     for (std::size_t i : dropped) removed.push_back(sender.ids[i]);
-    session.frames.push_back(expect_ok(encode_delta(info, removed, {}, {}, 0, encoding)).bytes);
+    session.frames.push_back(expect_ok(encode_delta(info, {removed, {}, {}, 0}, encoding)).bytes);
     sender.apply_split(dropped, {}, {});
     session.final_triangles = sender.sorted();
     return session;

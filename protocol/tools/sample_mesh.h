@@ -36,7 +36,8 @@ Subdivision subdivide(const SampleMesh& mesh, const std::vector<std::size_t>& in
                       std::uint32_t first_new_id, float radius = 1.0f);
 
 /// The frames of a refining sphere as a server would send them: a keyframe of an icosphere with
-/// non-consecutive triangle ids, three deltas each splitting a cap 1-to-4, and a delta that only
+/// non-consecutive triangle ids, three deltas each splitting a cap 1-to-4, a delta that moves
+/// vertices (function version 2) by re-sending the triangles around them, and a delta that only
 /// removes triangles (flagged converged). `final_triangles`: the sender's mesh after the last
 /// frame, sorted by id.
 struct SampleSession {

@@ -71,7 +71,7 @@ SampleDelta sample_delta() {
     d.added = split.triangles;
     d.removed.assign(chosen.rbegin(), chosen.rend());  // unsorted on purpose
     auto frame =
-        encode_delta(delta_info(), d.removed, d.sphere.vertices, d.added, 5000, unit_encoding());
+        encode_delta(delta_info(), {d.removed, d.sphere.vertices, d.added, 5000}, unit_encoding());
     EXPECT_TRUE(frame);
     if (frame) d.frame = frame.value();
     return d;
@@ -130,7 +130,7 @@ TEST(FrameHeader, rejects_invalid_headers) {
     b[60] = 31;  // more points than 3 per triangle
     EXPECT_TRUE(rejected(b));
     b = valid;
-    b[59] = 2;  // 2^25 + 10 triangles
+    b[58] = 0x40;  // 2^22 + 10 triangles
     EXPECT_TRUE(rejected(b));
 }
 
@@ -226,7 +226,7 @@ TEST(Frame, empty_keyframe_and_removal_only_delta) {
     EXPECT_TRUE(decoded.value().triangles.empty());
 
     const std::vector<std::uint64_t> removed = {9, 3, 7};
-    auto removal = encode_delta(delta_info(), removed, {}, {}, 0, unit_encoding());
+    auto removal = encode_delta(delta_info(), {removed, {}, {}, 0}, unit_encoding());
     ASSERT_TRUE(removal);
     auto removal_decoded = decode_frame(removal.value().bytes);
     ASSERT_TRUE(removal_decoded);
@@ -237,11 +237,12 @@ TEST(Frame, empty_keyframe_and_removal_only_delta) {
 TEST(Frame, encode_rejects_invalid_input) {
     const auto sphere = samples::icosphere(1);
     const std::vector<std::uint64_t> repeated = {4, 4};
-    EXPECT_FALSE(encode_delta(delta_info(), repeated, {}, {}, 0, unit_encoding()));
+    EXPECT_FALSE(encode_delta(delta_info(), {repeated, {}, {}, 0}, unit_encoding()));
     const std::vector<std::uint64_t> too_big = {kMaxTriangleId + 1};
-    EXPECT_FALSE(encode_delta(delta_info(), too_big, {}, {}, 0, unit_encoding()));
-    EXPECT_FALSE(encode_delta(delta_info(), {}, sphere.vertices, sphere.triangles,
-                              kMaxTriangleId - 2, unit_encoding()));
+    EXPECT_FALSE(encode_delta(delta_info(), {too_big, {}, {}, 0}, unit_encoding()));
+    EXPECT_FALSE(encode_delta(delta_info(),
+                              {{}, sphere.vertices, sphere.triangles, kMaxTriangleId - 2},
+                              unit_encoding()));
     FrameInfo info = delta_info();
     info.kind = FrameKind::keyframe;
     EXPECT_FALSE(encode_keyframe(info, sphere.vertices, sphere.triangles,

@@ -26,11 +26,12 @@ class ReplicaTest : public ::testing::Test {
 };
 
 TEST_F(ReplicaTest, applying_every_frame_gives_the_senders_mesh) {
-    ASSERT_EQ(frames.size(), 5u);
+    ASSERT_EQ(frames.size(), 6u);
     MeshReplica replica;
     for (const auto& frame : frames) EXPECT_EQ(replica.apply(frame), Outcome::applied);
     EXPECT_EQ(replica.sorted_triangles(), session.final_triangles);
-    EXPECT_EQ(replica.sequence(), 4u);
+    EXPECT_EQ(replica.sequence(), 5u);
+    EXPECT_EQ(replica.function_version(), 2u);
     EXPECT_TRUE(frames.back().header.flags & frame_flags::converged);
     // Every vertex a triangle uses is known, and none is kept unused.
     std::size_t used = 0;
@@ -42,6 +43,19 @@ TEST_F(ReplicaTest, applying_every_frame_gives_the_senders_mesh) {
         }
     }
     EXPECT_EQ(used, replica.vertex_count());
+}
+
+TEST_F(ReplicaTest, re_added_triangles_move_their_vertices) {
+    MeshReplica replica;
+    for (std::size_t i = 0; i < 4; ++i) replica.apply(frames[i]);
+    const DecodedFrame& move = frames[4];
+    ASSERT_EQ(move.header.function_version, 2u);
+    ASSERT_FALSE(move.removed.empty());
+    int moved = 0;
+    for (const Vertex& v : move.vertices) moved += replica.vertices().at(v.id) != v;
+    EXPECT_GT(moved, 0);
+    EXPECT_EQ(replica.apply(move), Outcome::applied);
+    for (const Vertex& v : move.vertices) EXPECT_EQ(replica.vertices().at(v.id), v);
 }
 
 TEST_F(ReplicaTest, deltas_before_a_keyframe_wait) {
@@ -85,8 +99,9 @@ TEST_F(ReplicaTest, gap_stops_until_the_next_keyframe) {
     auto decoded = decode_frame(keyframe.value().bytes);
     ASSERT_TRUE(decoded);
     EXPECT_EQ(replica.apply(decoded.value()), Outcome::applied);
-    EXPECT_EQ(replica.apply(frames[3]), Outcome::applied);
-    EXPECT_EQ(replica.apply(frames[4]), Outcome::applied);
+    for (std::size_t i = 3; i < frames.size(); ++i) {
+        EXPECT_EQ(replica.apply(frames[i]), Outcome::applied);
+    }
     EXPECT_EQ(replica.sorted_triangles(), session.final_triangles);
 }
 

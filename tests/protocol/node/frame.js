@@ -89,8 +89,8 @@ function heapCopy(draco, ArrayType, heap, byteLength, fill) {
 }
 
 /**
- * Decodes a Draco mesh payload: `points` (per Draco point: global id, position, normal) and
- * `faces` (3 point indices per triangle, in decoded order).
+ * Decodes a Draco mesh payload: per Draco point its global id, position and normal, and `faces`
+ * (3 point indices per triangle, in decoded order).
  */
 export function decodeMeshPayload(draco, payload) {
   const decoder = new draco.Decoder();
@@ -130,6 +130,13 @@ export function decodeMeshPayload(draco, payload) {
   }
 }
 
+function vertexAt(points, p) {
+  return {
+    position: Array.from(points.positions.subarray(3 * p, 3 * p + 3)),
+    normal: Array.from(points.normals.subarray(3 * p, 3 * p + 3)),
+  };
+}
+
 /**
  * Decodes a whole frame: { header, removed, vertices: Map(globalId -> {position, normal}),
  * triangles: [{ id, vertices: [globalId x3] }] in decoded order }.
@@ -153,12 +160,7 @@ export function decodeFrame(draco, bytes) {
     const payload = decodeMeshPayload(draco, section(header.mesh_bytes));
     if (payload.faces.length !== 3 * header.triangle_count) fail('triangle count differs');
     if (payload.pointCount !== header.point_count) fail('point count differs');
-    for (let p = 0; p < payload.pointCount; p++) {
-      vertices.set(payload.ids[p], {
-        position: Array.from(payload.positions.subarray(3 * p, 3 * p + 3)),
-        normal: Array.from(payload.normals.subarray(3 * p, 3 * p + 3)),
-      });
-    }
+    for (let p = 0; p < payload.pointCount; p++) vertices.set(payload.ids[p], vertexAt(payload, p));
     for (let t = 0; t < header.triangle_count; t++) {
       const corners = payload.faces.subarray(3 * t, 3 * t + 3);
       triangles.push({ id: ids[t], vertices: Array.from(corners, (p) => payload.ids[p]) });

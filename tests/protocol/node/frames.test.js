@@ -29,9 +29,10 @@ before(async () => {
   manifest = JSON.parse(fs.readFileSync(path.join(dir, 'frames.json'), 'utf8'));
 });
 
-test('the sample session has a keyframe, deltas and a converged removal', () => {
+test('the sample session has a keyframe, deltas, a function change and a converged removal', () => {
   const kinds = manifest.frames.map((f) => f.kind);
-  assert.deepEqual(kinds, ['keyframe', 'delta', 'delta', 'delta', 'delta']);
+  assert.deepEqual(kinds, ['keyframe', 'delta', 'delta', 'delta', 'delta', 'delta']);
+  assert.equal(manifest.frames[4].function_version, 2);
   assert.equal(manifest.frames.at(-1).flags & 1, 1);
 });
 
@@ -58,7 +59,7 @@ test('every frame decodes to the same removed ids, triangles and vertex bits', (
     assert.deepEqual(frame.removed, expected.removed, `${expected.file} removed`);
     const triangles = frame.triangles.map((t) => [t.id, ...t.vertices]);
     assert.deepEqual(triangles, expected.triangles, `${expected.file} triangles`);
-    const vertices = expected.vertices.map(([id, ...values]) => {
+    const vertices = expected.vertices.map(([id]) => {
       const v = frame.vertices.get(id);
       assert.ok(v, `${expected.file} lacks vertex ${id}`);
       return [id, ...v.position, ...v.normal];
@@ -77,6 +78,11 @@ test('applying the frames in order gives the final mesh', () => {
     .map(([id, vertices]) => [id, ...canonical(vertices)])
     .sort((a, b) => a[0] - b[0]);
   assert.deepEqual(mesh, manifest.final_triangles);
+  const used = new Set([...replica.triangles.values()].flat());
+  const vertices = [...used]
+    .sort((a, b) => a - b)
+    .map((id) => [id, ...replica.vertices.get(id).position, ...replica.vertices.get(id).normal]);
+  assert.deepEqual(vertices, manifest.final_vertices);
 });
 
 test('a skipped delta is detected as a gap', () => {
