@@ -55,12 +55,7 @@ std::optional<Error> check_frame_count(std::size_t count, const char* what) {
 
 FrameHeader header_for(const FrameInfo& info) {
     FrameHeader header;
-    header.kind = info.kind;
-    header.flags = info.flags;
-    header.session = info.session;
-    header.sequence = info.sequence;
-    header.timestamp_us = info.timestamp_us;
-    header.function_version = info.function_version;
+    static_cast<FrameInfo&>(header) = info;
     return header;
 }
 

@@ -50,14 +50,20 @@ inline constexpr std::uint16_t converged = 1 << 0;
 inline constexpr std::uint16_t catch_up = 1 << 1;
 }  // namespace frame_flags
 
-struct FrameHeader {
+/// What the server knows about a frame besides its triangles.
+struct FrameInfo {
     FrameKind kind = FrameKind::delta;
     std::uint16_t flags = 0;
     SessionId session;
     std::uint64_t sequence = 0;
     std::uint64_t timestamp_us = 0;
-    std::uint64_t base_triangle_id = 0;
     std::uint32_t function_version = 1;
+    friend bool operator==(const FrameInfo&, const FrameInfo&) = default;
+};
+
+/// The whole header: the frame's info, its id base, counts and section lengths.
+struct FrameHeader : FrameInfo {
+    std::uint64_t base_triangle_id = 0;
     std::uint32_t removed_count = 0;
     std::uint32_t triangle_count = 0;
     std::uint32_t point_count = 0;
@@ -73,16 +79,6 @@ void write_frame_header(const FrameHeader& header, std::span<std::uint8_t, kFram
 /// the implicit id range base + count staying <= kMaxTriangleId, and mesh_bytes = 0 exactly when
 /// triangle_count = 0. Section lengths are checked against the frame by decode_frame.
 Result<FrameHeader> read_frame_header(std::span<const std::uint8_t> frame);
-
-/// What the server knows about a frame besides its triangles.
-struct FrameInfo {
-    FrameKind kind = FrameKind::delta;
-    std::uint16_t flags = 0;
-    SessionId session;
-    std::uint64_t sequence = 0;
-    std::uint64_t timestamp_us = 0;
-    std::uint32_t function_version = 1;
-};
 
 struct EncodedFrame {
     std::vector<std::uint8_t> bytes;

@@ -416,26 +416,27 @@ ServerMessage read_ack(FieldReader& in, std::optional<RequestId> id) {
     return m;
 }
 
-ServerMessage read_progress(FieldReader& in) {
-    Progress m;
+/// Reads the fields Progress and Converged share.
+template <class Statistics>
+void read_statistics(FieldReader& in, Statistics& m) {
     m.session = read_session(in).value_or(SessionId{});
     m.version = read_version(in, true);
     m.sequence = read_count(in, "sequence");
     m.triangles = read_count(in, "triangles");
     m.error_max = read_double(in, "error_max");
     m.error_total = read_double(in, "error_total");
+}
+
+ServerMessage read_progress(FieldReader& in) {
+    Progress m;
+    read_statistics(in, m);
     m.splits_per_second = read_double(in, "splits_per_second");
     return m;
 }
 
 ServerMessage read_converged(FieldReader& in) {
     Converged m;
-    m.session = read_session(in).value_or(SessionId{});
-    m.version = read_version(in, true);
-    m.sequence = read_count(in, "sequence");
-    m.triangles = read_count(in, "triangles");
-    m.error_max = read_double(in, "error_max");
-    m.error_total = read_double(in, "error_total");
+    read_statistics(in, m);
     m.splits = read_count(in, "splits");
     m.merges = read_count(in, "merges");
     m.first_mesh_ms = read_double(in, "first_mesh_ms");
@@ -647,26 +648,27 @@ ordered_json write(const Pong& m) {
     return out;
 }
 
-ordered_json write(const Progress& m) {
-    ordered_json out = envelope(MessageType::progress, std::nullopt);
+/// The fields Progress and Converged share.
+template <class Statistics>
+ordered_json statistics_json(MessageType type, const Statistics& m) {
+    ordered_json out = envelope(type, std::nullopt);
     out["session"] = m.session.to_hex();
     out["version"] = m.version;
     out["sequence"] = m.sequence;
     out["triangles"] = m.triangles;
     out["error_max"] = m.error_max;
     out["error_total"] = m.error_total;
+    return out;
+}
+
+ordered_json write(const Progress& m) {
+    ordered_json out = statistics_json(MessageType::progress, m);
     out["splits_per_second"] = m.splits_per_second;
     return out;
 }
 
 ordered_json write(const Converged& m) {
-    ordered_json out = envelope(MessageType::converged, std::nullopt);
-    out["session"] = m.session.to_hex();
-    out["version"] = m.version;
-    out["sequence"] = m.sequence;
-    out["triangles"] = m.triangles;
-    out["error_max"] = m.error_max;
-    out["error_total"] = m.error_total;
+    ordered_json out = statistics_json(MessageType::converged, m);
     out["splits"] = m.splits;
     out["merges"] = m.merges;
     out["first_mesh_ms"] = m.first_mesh_ms;
