@@ -1,29 +1,49 @@
-// The loops of the batch evaluator: one operation applied to a block of points held in
-// structure-of-arrays registers (arrays of up to kBatchBlock doubles).
+// The loops of the batch evaluator: a straight-line program run over one block of points at a
+// time, each register an array of up to kBatchBlock doubles (structure of arrays).
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <span>
 
 #include "tape/tape.h"
 
+/// Compiles a function also for AVX2 and picks the version at load time (GCC on x86-64; AVX2
+/// without FMA rounds exactly as SSE2). For the batch loops, and for the native baselines the
+/// benchmark compares them with.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define ISOMESH_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define ISOMESH_VECTOR_CLONES
+#endif
+
 namespace isomesh {
 
-/// Points per block. A block's registers should stay in the first-level caches: prospero needs
-/// a few dozen live registers at a time.
+/// Points per block: long enough to amortise dispatching each step, short enough that the live
+/// registers of a big model (prospero: 127) stay in the second-level cache.
 inline constexpr std::size_t kBatchBlock = 256;
 
-/// out[i] = op(a[i], b[i]) for i < n, with an immediate operand in place of a or b as the form
-/// says. Preconditions: n <= kBatchBlock; out overlaps neither a nor b.
-using BatchKernel = void (*)(const double* a, const double* b, double imm, double* out,
-                             std::size_t n);
-
-enum class BatchForm {
+enum class BatchForm : std::uint8_t {
     Registers,   // unary op(a[i]) (imm: PowInt's exponent), or binary op(a[i], b[i])
     ImmediateA,  // binary op(imm, b[i])
     ImmediateB,  // binary op(a[i], imm)
 };
 
-/// The kernel for `op` in `form`. Leaves: Const fills out with imm; VarX, VarY and VarZ copy a.
-BatchKernel batch_kernel(Op op, BatchForm form);
+/// One step: register out = op(register a, register b) over the block, with imm in place of an
+/// operand as `form` says. Leaves: Const fills out with imm; VarX, VarY and VarZ copy register a.
+struct BatchStep {
+    Op op;
+    BatchForm form;
+    std::uint32_t out;
+    std::uint32_t a;
+    std::uint32_t b;
+    double imm;
+};
+
+/// Runs `steps` in order over one block of n points. read[r] and write[r] are register r's array
+/// (both the same array for a scratch register).
+/// Preconditions: n <= kBatchBlock; a step's output array overlaps none of its operand arrays.
+void run_batch_steps(std::span<const BatchStep> steps, const double* const* read,
+                     double* const* write, std::size_t n);
 
 }  // namespace isomesh

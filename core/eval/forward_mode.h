@@ -14,35 +14,14 @@
 #include <vector>
 
 #include "eval/interval_math.h"
+#include "eval/tape_arithmetic.h"
 #include "eval/tape_ops.h"
-#include "tape/op_math.h"
 
 namespace isomesh::forward_mode {
 
-// The arithmetic of the two number types.
-inline double unary(Op op, double a, double imm = 0.0) {
-    return apply_unary(op, a, imm);
-}
-inline double binary(Op op, double a, double b) {
-    return apply_binary(op, a, b);
-}
-inline IntervalValue unary(Op op, const IntervalValue& a, double imm = 0.0) {
-    return interval_unary(op, a, imm);
-}
-inline IntervalValue binary(Op op, const IntervalValue& a, const IntervalValue& b) {
-    return interval_binary(op, a, b);
-}
-
-template <class T>
-T constant(double c);
-template <>
-inline double constant<double>(double c) {
-    return c;
-}
-template <>
-inline IntervalValue constant<IntervalValue>(double c) {
-    return interval_constant(c);
-}
+using arithmetic::binary;
+using arithmetic::constant;
+using arithmetic::unary;
 
 /// partial * d, exactly 0 when the tangent d is 0: a zero tangent contributes nothing, even where
 /// the partial is infinite or NaN (x^c with a negative base has ln(x) = NaN in d/dc, but c is

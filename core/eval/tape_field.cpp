@@ -8,10 +8,9 @@
 
 #include "eval/forward_mode.h"
 #include "eval/interval_math.h"
-#include "eval/tape_ops.h"
+#include "eval/tape_arithmetic.h"
 #include "eval/tape_program.h"
 #include "eval/tape_simplify.h"
-#include "tape/op_math.h"
 
 namespace isomesh {
 
@@ -52,19 +51,8 @@ class TapeEvaluator final : public Evaluator {
     }
 
     double value(const glm::dvec3& p) override {
-        const std::vector<Instruction>& code = top().code;
-        if (slots_.size() < code.size()) slots_.resize(code.size());
-        double* s = slots_.data();
-        for (std::size_t i = 0; i < code.size(); ++i) {
-            const Instruction& ins = code[i];
-            if (is_binary(ins.op))
-                s[i] = apply_binary(ins.op, s[ins.a], s[ins.b]);
-            else if (is_unary(ins.op))
-                s[i] = apply_unary(ins.op, s[ins.a], ins.imm);
-            else
-                s[i] = leaf_value(ins, p);
-        }
-        return s[code.size() - 1];
+        auto leaf = [&p](const Instruction& ins) { return leaf_value(ins, p); };
+        return arithmetic::evaluate(std::span(top().code), slots_, leaf).back();
     }
 
     void values(const PointBatch& points, std::span<double> out) override {
@@ -78,8 +66,7 @@ class TapeEvaluator final : public Evaluator {
             read_[1] = points.y.data() + start;
             read_[2] = points.z.data() + start;
             write_[kOutputRegister] = out.data() + start;
-            for (const BatchStep& step : program.steps)
-                step.kernel(read_[step.a], read_[step.b], step.imm, write_[step.out], count);
+            run_batch_steps(program.steps, read_.data(), write_.data(), count);
         }
     }
 
@@ -124,19 +111,8 @@ class TapeEvaluator final : public Evaluator {
 
     /// Interval enclosures of every instruction of `program` over `box`.
     std::span<const IntervalValue> interval_slots(const TapeProgram& program, const Box& box) {
-        const std::vector<Instruction>& code = program.code;
-        if (intervals_.size() < code.size()) intervals_.resize(code.size());
-        IntervalValue* s = intervals_.data();
-        for (std::size_t i = 0; i < code.size(); ++i) {
-            const Instruction& ins = code[i];
-            if (is_binary(ins.op))
-                s[i] = interval_binary(ins.op, s[ins.a], s[ins.b]);
-            else if (is_unary(ins.op))
-                s[i] = interval_unary(ins.op, s[ins.a], ins.imm);
-            else
-                s[i] = leaf_interval(ins, box);
-        }
-        return {s, code.size()};
+        auto leaf = [&box](const Instruction& ins) { return leaf_interval(ins, box); };
+        return arithmetic::evaluate(std::span(program.code), intervals_, leaf);
     }
 
     /// Points the scratch registers at this evaluator's block memory.

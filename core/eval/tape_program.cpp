@@ -103,7 +103,7 @@ TapeProgram make_program(std::vector<Instruction> code) {
             if (ins.op == Op::Const && !in_register[i]) continue;  // read as an immediate only
         }
         BatchForm form = form_of(c, ins);
-        BatchStep step{batch_kernel(ins.op, form), 0, 0, 0, ins.imm};
+        BatchStep step{ins.op, form, 0, 0, 0, ins.imm};
         if (is_variable)
             step.a = static_cast<std::uint32_t>(ins.op) - static_cast<std::uint32_t>(Op::VarX);
         if (!is_leaf(ins.op)) {

@@ -11,15 +11,6 @@
 
 namespace isomesh {
 
-/// One batch instruction: registers[out] = kernel(registers[a], registers[b], imm) over a block.
-struct BatchStep {
-    BatchKernel kernel;
-    std::uint32_t out;
-    std::uint32_t a;
-    std::uint32_t b;
-    double imm;
-};
-
 /// Batch registers: x, y and z of the block's points, the caller's output array, then scratch.
 inline constexpr std::uint32_t kOutputRegister = 3;
 inline constexpr std::uint32_t kFirstScratchRegister = 4;

@@ -74,6 +74,17 @@ class EvaluatorConformance : public ::testing::TestWithParam<Backend> {
         for (int i = 0; i < count; ++i) points.emplace_back(u(rng), u(rng), u(rng));
         return points;
     }
+
+    /// Calls check(box, points) on `count` random boxes with points inside each (see
+    /// test_support.h), stopping at the first box that fails.
+    template <class Check>
+    void for_random_boxes(std::uint64_t seed, int count, int points_per_box, const Check& check) {
+        Rng rng(seed);
+        for (int n = 0; n < count && !HasFailure(); ++n) {
+            Box box = random_box(rng, function().scale, function().special);
+            check(box, points_in(rng, box, function().special, points_per_box));
+        }
+    }
 };
 
 std::string describe(const glm::dvec3& p) {
@@ -135,44 +146,34 @@ TEST_P(EvaluatorConformance, value_matches_std_reference) {
 
 TEST_P(EvaluatorConformance, interval_contains_every_point_value) {
     auto e = evaluator();
-    Rng rng(4);
-    int failures = 0;
-    for (int n = 0; n < 400 && failures < 5; ++n) {
-        Box box = random_box(rng, function().scale, function().special);
+    for_random_boxes(4, 400, 30, [&](const Box& box, const std::vector<glm::dvec3>& points) {
         IntervalValue iv = e->interval(box);
-        for (const auto& p : points_in(rng, box, function().special, 30)) {
+        for (const auto& p : points) {
             double v = e->value(p);
-            bool sound = std::isnan(v) ? iv.maybe_undefined : iv.value.contains(v);
-            if (!sound && ++failures <= 5) {
-                ADD_FAILURE() << describe(box, iv.value) << " undefined " << iv.maybe_undefined
-                              << " misses f" << describe(p) << " = " << v;
-            }
+            ASSERT_TRUE(std::isnan(v) ? iv.maybe_undefined : iv.value.contains(v))
+                << describe(box, iv.value) << " undefined " << iv.maybe_undefined << " misses f"
+                << describe(p) << " = " << v;
         }
-    }
+    });
 }
 
 TEST_P(EvaluatorConformance, interval_gradient_contains_point_gradients) {
     auto e = evaluator();
-    Rng rng(5);
-    int failures = 0;
-    for (int n = 0; n < 300 && failures < 5; ++n) {
-        Box box = random_box(rng, function().scale, function().special);
+    for_random_boxes(5, 300, 20, [&](const Box& box, const std::vector<glm::dvec3>& points) {
         IntervalGradient ig = e->interval_gradient(box);
         IntervalValue iv = e->interval(box);
-        EXPECT_TRUE(same_value(ig.value.value.lo, iv.value.lo) &&
+        ASSERT_TRUE(same_value(ig.value.value.lo, iv.value.lo) &&
                     same_value(ig.value.value.hi, iv.value.hi));
-        EXPECT_EQ(ig.value.maybe_undefined, iv.maybe_undefined);
-        for (const auto& p : points_in(rng, box, function().special, 20)) {
+        ASSERT_EQ(ig.value.maybe_undefined, iv.maybe_undefined);
+        for (const auto& p : points) {
             glm::dvec3 g = e->value_gradient(p).gradient;
             for (int k = 0; k < 3; ++k) {
-                if (!std::isfinite(g[k]) || ig.gradient[k].contains(g[k])) continue;
-                if (++failures <= 5) {
-                    ADD_FAILURE() << describe(box, ig.gradient[k]) << " misses d/d"
-                                  << "xyz"[k] << " f" << describe(p) << " = " << g[k];
-                }
+                ASSERT_TRUE(!std::isfinite(g[k]) || ig.gradient[k].contains(g[k]))
+                    << describe(box, ig.gradient[k]) << " misses d/d"
+                    << "xyz"[k] << " f" << describe(p) << " = " << g[k];
             }
         }
-    }
+    });
 }
 
 // Where a box is flagged neither discontinuous nor undefined, f is continuous and differentiable
@@ -180,18 +181,15 @@ TEST_P(EvaluatorConformance, interval_gradient_contains_point_gradients) {
 // value theorem). A jump the flags missed (floor at an integer, a pole) breaks the bound.
 TEST_P(EvaluatorConformance, unflagged_box_obeys_gradient_bound) {
     auto e = evaluator();
-    Rng rng(9);
     int checked = 0;
-    for (int n = 0; n < 300; ++n) {
-        Box box = random_box(rng, function().scale, function().special);
+    for_random_boxes(9, 300, 10, [&](const Box& box, const std::vector<glm::dvec3>& points) {
         IntervalGradient ig = e->interval_gradient(box);
-        if (ig.value.maybe_discontinuous || ig.value.maybe_undefined) continue;
+        if (ig.value.maybe_discontinuous || ig.value.maybe_undefined) return;
         glm::dvec3 lipschitz;
         for (int k = 0; k < 3; ++k)
             lipschitz[k] = std::max(std::fabs(ig.gradient[k].lo), std::fabs(ig.gradient[k].hi));
-        if (!std::isfinite(lipschitz.x + lipschitz.y + lipschitz.z)) continue;
+        if (!std::isfinite(lipschitz.x + lipschitz.y + lipschitz.z)) return;
         ++checked;
-        std::vector<glm::dvec3> points = points_in(rng, box, function().special, 10);
         double f0 = e->value(points[0]);
         for (const auto& p : points) {
             double f = e->value(p);
@@ -200,7 +198,7 @@ TEST_P(EvaluatorConformance, unflagged_box_obeys_gradient_bound) {
             ASSERT_LE(std::fabs(f - f0), bound + rounding)
                 << "f" << describe(points[0]) << " = " << f0 << ", f" << describe(p) << " = " << f;
         }
-    }
+    });
     EXPECT_GT(checked, 20);
 }
 
@@ -240,17 +238,15 @@ TEST_P(EvaluatorConformance, gradient_matches_central_differences) {
 TEST_P(EvaluatorConformance, push_keeps_results_inside_box) {
     auto plain = evaluator(), pushed = evaluator();
     const std::size_t full_size = active_tape_size(*pushed);
-    Rng rng(8);
-    for (int n = 0; n < 150; ++n) {
-        Box box = random_box(rng, function().scale, function().special);
+    int n = 0;
+    for_random_boxes(8, 150, 20, [&](const Box& box, std::vector<glm::dvec3> points) {
         pushed->push(box);
-        Box inner = box;
-        bool nested = n % 2 == 1;
+        bool nested = ++n % 2 == 0;  // then evaluate in a second push, on the lower octant
+        Box inner = nested ? Box{box.lo, box.center()} : box;
         if (nested) {
-            inner = {box.lo, box.center()};
             pushed->push(inner);
+            for (auto& p : points) p = glm::clamp(p, inner.lo, inner.hi);
         }
-        std::vector<glm::dvec3> points = points_in(rng, inner, function().special, 20);
         std::vector<double> x, y, z, batch(points.size());
         for (const auto& p : points) {
             x.push_back(p.x), y.push_back(p.y), z.push_back(p.z);
@@ -260,17 +256,17 @@ TEST_P(EvaluatorConformance, push_keeps_results_inside_box) {
             for (int k = 0; k < 3; ++k) ASSERT_TRUE(same_value(a.gradient[k], b.gradient[k]));
         }
         pushed->values({x, y, z}, batch);
-        for (std::size_t i = 0; i < points.size(); ++i)
-            ASSERT_TRUE(same_value(batch[i], plain->value(points[i]))) << describe(points[i]);
         IntervalValue iv = pushed->interval(inner);
-        for (const auto& p : points) {
-            double v = plain->value(p);
-            ASSERT_TRUE(std::isnan(v) ? iv.maybe_undefined : iv.value.contains(v)) << describe(p);
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            double v = plain->value(points[i]);
+            ASSERT_TRUE(same_value(batch[i], v)) << describe(points[i]);
+            ASSERT_TRUE(std::isnan(v) ? iv.maybe_undefined : iv.value.contains(v))
+                << describe(points[i]);
         }
         if (nested) pushed->pop();
         pushed->pop();
         ASSERT_EQ(active_tape_size(*pushed), full_size);
-    }
+    });
 }
 
 INSTANTIATE_TEST_SUITE_P(AllBackends, EvaluatorConformance, ::testing::ValuesIn(backends()),

@@ -8,17 +8,10 @@
 #include <stdexcept>
 #include <thread>
 
-#include "expr/compile.h"
 #include "test_support.h"
 
 namespace isomesh {
 namespace {
-
-std::shared_ptr<const Tape> compiled(const char* source) {
-    CompileResult result = compile_expression(source);
-    EXPECT_TRUE(result.ok()) << source;
-    return std::make_shared<const Tape>(std::move(result.tape));
-}
 
 std::string error_of(std::shared_ptr<const Tape> tape, std::vector<double> params) {
     try {
@@ -41,7 +34,7 @@ TEST(MakeTapeField, refuses_invalid_tape) {
 }
 
 TEST(MakeTapeField, refuses_wrong_parameter_count) {
-    auto tape = compiled("a x + b");
+    auto tape = testing::compile_tape("a x + b");
     ASSERT_EQ(tape->params.size(), 2u);
     EXPECT_NE(error_of(tape, {1.0}).find("2 parameters but 1"), std::string::npos);
 }
@@ -55,7 +48,7 @@ TEST(MakeTapeField, refuses_fractional_integer_power) {
 }
 
 TEST(MakeTapeField, parameters_rebind_without_recompiling) {
-    auto tape = compiled("a x^2 + b = z");
+    auto tape = testing::compile_tape("a x^2 + b = z");
     ASSERT_EQ(tape->params, (std::vector<std::string>{"a", "b"}));
     auto first = make_tape_field(tape, {1.5, 2.0})->make_evaluator();
     auto second = make_tape_field(tape, {-1.0, 0.5})->make_evaluator();
@@ -69,7 +62,7 @@ TEST(MakeTapeField, parameters_rebind_without_recompiling) {
 }
 
 TEST(MakeTapeField, domain_is_infinite) {
-    Box domain = make_tape_field(compiled("x"), {})->domain();
+    Box domain = make_tape_field(testing::compile_tape("x"), {})->domain();
     EXPECT_TRUE(std::isinf(domain.lo.x) && domain.lo.x < 0);
     EXPECT_TRUE(std::isinf(domain.hi.z) && domain.hi.z > 0);
 }
@@ -86,8 +79,31 @@ TEST(TapeEvaluator, constant_and_variable_tapes_fill_batches) {
     EXPECT_EQ(e->value_gradient({0, 4, 0}).gradient, glm::dvec3(0, 1, 0));
 }
 
+// Batch loops are written for speed (min and max differently from op_math.h); every operation
+// must still give the point evaluator's bits on zeros of both signs, infinities and NaN.
+TEST(TapeEvaluator, batch_matches_point_on_special_values) {
+    const std::vector<double> special = {std::nan(""), -INFINITY, -2.5, -1.0, -0.5, -0.0,
+                                         0.0,          0.5,       1.0,  2.0,  3.0,  INFINITY};
+    std::vector<double> xs, ys, zs, out;
+    for (double x : special)
+        for (double y : special) xs.push_back(x), ys.push_back(y), zs.push_back(0.0);
+    out.resize(xs.size());
+    for (int op_index = static_cast<int>(Op::Neg); op_index < kOpCount; ++op_index) {
+        Op op = static_cast<Op>(op_index);
+        Tape tape;
+        tape.code = {
+            {Op::VarX, 0, 0, 0.0}, {Op::VarY, 0, 0, 0.0}, {op, 0, 1, op == Op::PowInt ? 3.0 : 0.0}};
+        auto e = make_tape_field(std::make_shared<const Tape>(tape), {})->make_evaluator();
+        e->values({xs, ys, zs}, out);
+        for (std::size_t i = 0; i < xs.size(); ++i) {
+            ASSERT_TRUE(testing::same_value(out[i], e->value({xs[i], ys[i], 0.0})))
+                << op_name(op) << "(" << xs[i] << ", " << ys[i] << "): batch " << out[i];
+        }
+    }
+}
+
 TEST(TapeEvaluator, one_over_x_is_flagged_discontinuous_at_zero) {
-    auto e = make_tape_field(compiled("1/x = 0"), {})->make_evaluator();
+    auto e = make_tape_field(testing::compile_tape("1/x = 0"), {})->make_evaluator();
     IntervalValue across = e->interval({{-1, -1, -1}, {1, 1, 1}});
     EXPECT_TRUE(across.maybe_discontinuous);
     IntervalValue away = e->interval({{0.5, -1, -1}, {1, 1, 1}});
@@ -96,7 +112,7 @@ TEST(TapeEvaluator, one_over_x_is_flagged_discontinuous_at_zero) {
 }
 
 TEST(TapeEvaluator, interval_gradient_proves_monotone_edges) {
-    auto e = make_tape_field(compiled("x^2+y^2+z^2=1"), {})->make_evaluator();
+    auto e = make_tape_field(testing::compile_tape("x^2+y^2+z^2=1"), {})->make_evaluator();
     IntervalGradient g = e->interval_gradient({{0.9, -0.1, -0.1}, {1.1, 0.1, 0.1}});
     EXPECT_GE(g.gradient[0].lo, 1.8);
     EXPECT_LE(g.gradient[0].hi, 2.2);
@@ -127,7 +143,7 @@ TEST(TapeEvaluator, evaluators_of_one_field_run_concurrently) {
 }
 
 TEST(TapeEvaluator, pop_without_push_keeps_the_tape) {
-    auto e = make_tape_field(compiled("min(x, y)"), {})->make_evaluator();
+    auto e = make_tape_field(testing::compile_tape("min(x, y)"), {})->make_evaluator();
 #ifdef NDEBUG
     e->pop();  // a contract violation (asserted in debug builds), harmless in release
 #endif

@@ -5,24 +5,17 @@
 #include <gtest/gtest.h>
 
 #include "eval/tape_field.h"
-#include "expr/compile.h"
 #include "test_support.h"
 
 namespace isomesh {
 namespace {
-
-std::shared_ptr<const Tape> compiled(const char* source) {
-    CompileResult result = compile_expression(source);
-    EXPECT_TRUE(result.ok()) << source;
-    return std::make_shared<const Tape>(std::move(result.tape));
-}
 
 /// Two spheres far apart, joined: near one, the other is irrelevant.
 constexpr const char* kTwoSpheres =
     "min(sqrt((x-2)^2+y^2+z^2)-1, sqrt((x+2)^2+y^2+z^2)-1 + 0.1 sin(5x)sin(5y)sin(5z))";
 
 TEST(TapeSimplify, csg_union_drops_the_far_shape) {
-    auto e = make_tape_field(compiled(kTwoSpheres), {})->make_evaluator();
+    auto e = make_tape_field(testing::compile_tape(kTwoSpheres), {})->make_evaluator();
     const std::size_t full = active_tape_size(*e);
     Box near_right{{1.5, -0.5, -0.5}, {2.5, 0.5, 0.5}};
     e->push(near_right);
@@ -37,7 +30,8 @@ TEST(TapeSimplify, csg_union_drops_the_far_shape) {
 }
 
 TEST(TapeSimplify, nested_pushes_only_shrink) {
-    auto e = make_tape_field(compiled("max(min(x, y), min(z, x + 3))"), {})->make_evaluator();
+    auto e = make_tape_field(testing::compile_tape("max(min(x, y), min(z, x + 3))"), {})
+                 ->make_evaluator();
     const std::size_t full = active_tape_size(*e);
     e->push({{0, 0, 10}, {1, 1, 11}});  // max(min(x, y), x + 3) = x + 3 once min(z, x+3) = x+3
     std::size_t outer = active_tape_size(*e);
@@ -54,7 +48,7 @@ TEST(TapeSimplify, nested_pushes_only_shrink) {
 TEST(TapeSimplify, keeps_branch_that_may_be_undefined) {
     // On x in [-1, 1], 5 < sqrt(x) + 10 always, but sqrt(x) is NaN for x < 0 and min propagates
     // NaN: dropping it would turn NaN into 5.
-    auto e = make_tape_field(compiled("min(5, sqrt(x) + 10)"), {})->make_evaluator();
+    auto e = make_tape_field(testing::compile_tape("min(5, sqrt(x) + 10)"), {})->make_evaluator();
     const std::size_t full = active_tape_size(*e);
     e->push({{-1, -1, -1}, {1, 1, 1}});
     EXPECT_EQ(active_tape_size(*e), full);
@@ -67,7 +61,8 @@ TEST(TapeSimplify, keeps_branch_that_may_be_undefined) {
 }
 
 TEST(TapeSimplify, disabled_push_changes_nothing) {
-    auto e = make_tape_field(compiled(kTwoSpheres), {}, {.simplify = false})->make_evaluator();
+    auto e = make_tape_field(testing::compile_tape(kTwoSpheres), {}, {.simplify = false})
+                 ->make_evaluator();
     const std::size_t full = active_tape_size(*e);
     e->push({{1.5, -0.5, -0.5}, {2.5, 0.5, 0.5}});
     EXPECT_EQ(active_tape_size(*e), full);

@@ -7,6 +7,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <gtest/gtest.h>
+
+#include "expr/compile.h"
 #include "expr/vm_reader.h"
 
 namespace isomesh::testing {
@@ -65,6 +68,12 @@ std::vector<TestFunction> test_functions() {
     auto reference = [](const glm::dvec3& p) { return 1.5 * p.x * p.x + -2.0 * p.y - p.z; };
     f.push_back({"parameters", tape, {1.5, -2.0}, reference, 2.0, {}});
     return f;
+}
+
+std::shared_ptr<const Tape> compile_tape(const char* source) {
+    CompileResult result = compile_expression(source);
+    EXPECT_TRUE(result.ok()) << source << ": " << (result.ok() ? "" : result.error->to_string());
+    return std::make_shared<const Tape>(std::move(result.tape));
 }
 
 std::shared_ptr<const Tape> load_vm_tape(const std::string& path) {

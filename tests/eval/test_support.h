@@ -139,6 +139,10 @@ TestFunction make_function(std::string name, double scale, std::vector<glm::dvec
 /// The functions every tape backend is tested on.
 std::vector<TestFunction> test_functions();
 
+/// The tape of an expression of the language (expr/compile.h); a test failure if it does not
+/// compile.
+std::shared_ptr<const Tape> compile_tape(const char* source);
+
 /// A tape read from a Fidget .vm file (format in testdata/README.md), for prospero and bear.
 std::shared_ptr<const Tape> load_vm_tape(const std::string& path);
 
