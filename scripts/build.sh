@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Configures and builds isomesh (Release) into build/. Binaries land in build/bin/; the browser
-# client (clients/web, built by Vite) lands in clients/web/dist, which isomesh-server serves at /.
+# client (clients/web, built by Vite) lands in build/web, isomesh-server's default web root.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)

@@ -1,8 +1,8 @@
 // Vite configuration of the browser viewer.
 //
-// `npm run build` writes the static site to clients/web/dist, which isomesh-server serves at GET /
-// (`--web-root clients/web/dist`). Everything (three.js, the Draco decoder's .wasm) is bundled:
-// the page needs no internet access.
+// `npm run build` writes the static site to build/web at the repository root (next to build/bin),
+// isomesh-server's default web root (served at GET /). Everything (three.js, the Draco decoder's
+// .wasm) is bundled: the page needs no internet access.
 //
 // `npm run dev` serves the viewer with hot reload on 127.0.0.1:5173 and forwards /ws to a server
 // on 127.0.0.1:8080 (ISOMESH_SERVER overrides).
@@ -24,7 +24,8 @@ export default defineConfig({
     dedupe: ['draco3d'],
   },
   build: {
-    outDir: 'dist',
+    outDir: here('../../build/web'),
+    emptyOutDir: true,
     target: 'es2022',
     chunkSizeWarningLimit: 1024,
   },

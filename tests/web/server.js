@@ -12,14 +12,14 @@ import { fileURLToPath } from 'node:url';
 
 export const REPO = fileURLToPath(new URL('../..', import.meta.url));
 export const SERVER_BIN = process.env.ISOMESH_SERVER_BIN ?? join(REPO, 'build/bin/isomesh-server');
-export const WEB_ROOT = process.env.ISOMESH_WEB_ROOT ?? join(REPO, 'clients/web/dist');
+export const WEB_ROOT = process.env.ISOMESH_WEB_ROOT ?? join(REPO, 'build/web');
 
 /**
  * Resolves with {url, port, stop(), log} once the server listens. `log` collects its log lines.
  * Rejects if it exits or stays silent for `timeoutMs`.
  */
 export function startServer(extraArgs = [], { timeoutMs = 20000 } = {}) {
-  for (const [what, path] of [['server binary', SERVER_BIN], ['web client (clients/web/dist/index.html)', join(WEB_ROOT, 'index.html')]]) {
+  for (const [what, path] of [['server binary', SERVER_BIN], ['web client (build/web/index.html)', join(WEB_ROOT, 'index.html')]]) {
     if (!existsSync(path)) throw new Error(`no ${what} at ${path}: run scripts/build.sh first`);
   }
   const args = ['--bind', '127.0.0.1', '--port', '0', '--web-root', WEB_ROOT, '--threads', '2', ...extraArgs];
