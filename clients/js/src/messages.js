@@ -2,7 +2,7 @@
 // messages"). Every message carries "v" (the protocol version) and "type"; requests may carry a
 // client-chosen "id" that the reply echoes.
 
-import { IsomeshError } from './errors.js';
+import { ERROR_CODES, IsomeshError } from './errors.js';
 
 /** The protocol version this library speaks: "v" of every message, byte 4 of every frame. */
 export const PROTOCOL_VERSION = 1;
@@ -82,9 +82,10 @@ export function sessionState(reply) {
   return { version, expression, vm, parameters: parameters ?? {}, box, constraints };
 }
 
-/** An IsomeshError from an `error` message. */
+/** An IsomeshError from an `error` message; a code this version does not know reads as 'internal'. */
 export function errorFromReply(reply) {
-  return new IsomeshError(reply.code ?? 'internal', reply.message ?? '', {
+  const code = ERROR_CODES.includes(reply.code) ? reply.code : 'internal';
+  return new IsomeshError(code, reply.message ?? '', {
     column: reply.column,
     session: reply.session,
     requestId: reply.id,

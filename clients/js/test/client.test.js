@@ -149,7 +149,8 @@ test('errors that answer no request go to the session or the client', async () =
   socket.reply({ type: 'error', session: SESSION, code: 'eval_timeout', message: 'too slow' });
   socket.reply({ type: 'error', code: 'bad_json', message: 'not JSON' });
   socket.onmessage({ data: '{"v":2,"type":"pong"}' });
-  assert.deepEqual(seen, [['session', 'eval_timeout'], ['client', 'bad_json'], ['client', 'unsupported_version']]);
+  socket.reply({ type: 'error', code: 'some_future_code', message: 'new in a later server' });
+  assert.deepEqual(seen, [['session', 'eval_timeout'], ['client', 'bad_json'], ['client', 'unsupported_version'], ['client', 'internal']]);
 });
 
 test('closed sessions leave the client; a closed connection rejects pending requests', async () => {

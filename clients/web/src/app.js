@@ -184,7 +184,7 @@ export class App {
   #applyState(state) {
     this.wanted.expression = state.expression ?? this.wanted.expression;
     this.wanted.box = state.box;
-    this.wanted.constraints = { triangles: state.constraints?.triangles, max_error: state.constraints?.max_error };
+    this.wanted.constraints = { ...state.constraints };
     if (!this.pending?.parameters) Object.assign(this.wanted.parameters, state.parameters);
     this.panel.setParameters(state.parameters);
     this.panel.setConstraints(state.constraints ?? {});
@@ -226,9 +226,10 @@ export class App {
       return;
     }
     let status = 'refining';
+    const busy = this.pending || this.inFlight;
     if (this.paused) status = 'paused';
-    else if (this.pending || this.inFlight || !s.mesh.synchronized || s.mesh.functionVersion < (s.state?.version ?? 0)) status = 'meshing';
-    else if (s.converged) status = 'converged';
+    else if (!busy && s.converged) status = 'converged'; // a version may converge with no frame
+    else if (busy || !s.mesh.synchronized || s.mesh.functionVersion < (s.state?.version ?? 0)) status = 'meshing';
     this.#setStatus(status);
   }
 

@@ -26,6 +26,7 @@ const panel = new Panel({
   onParameter: (name, value) => app?.setParameter(name, value),
   onBudget: (triangles) => app?.setConstraints({ triangles }),
   onMaxError: (value) => app?.setConstraints({ max_error: value }),
+  onErrorMeasure: (name) => app?.setConstraints({ error_measure: name }),
   onBox: (box) => app?.setBox(box),
   onGallery: (example) => app?.showExample(example),
   onWireframe: (on) => viewer.setWireframe(on),

@@ -9,6 +9,7 @@ const $ = (selector) => document.querySelector(selector);
 /**
  * @param {object} handlers
  *   onEquation(text), onParameter(name, value), onBudget(triangles), onMaxError(value),
+ *   onErrorMeasure(name),
  *   onBox(box), onGallery(example), onWireframe(on), onShowBox(on), onResetView(), onPause()
  */
 export class Panel {
@@ -21,6 +22,7 @@ export class Panel {
     this.budget = $('#budget');
     this.budgetValue = $('#budget-value');
     this.maxError = $('#max-error');
+    this.errorMeasure = $('#error-measure');
     this.boxInputs = [...document.querySelectorAll('[data-box]')];
     this.pauseButton = $('#pause');
     this.sliderRows = new Map();
@@ -47,6 +49,7 @@ export class Panel {
       const value = this.maxError.value === '' ? 0 : Number(this.maxError.value);
       if (Number.isFinite(value) && value >= 0) h.onMaxError(value);
     });
+    this.errorMeasure.addEventListener('change', () => h.onErrorMeasure(this.errorMeasure.value));
     for (const input of this.boxInputs) input.addEventListener('change', () => this.#boxChanged());
 
     $('#wireframe').addEventListener('change', (e) => h.onWireframe(e.target.checked));
@@ -153,7 +156,11 @@ export class Panel {
     return row;
   }
 
-  setConstraints({ triangles, max_error: maxError }) {
+  setConstraints({ triangles, max_error: maxError, error_measure: measure }) {
+    if (measure && ![...this.errorMeasure.options].some((o) => o.value === measure)) {
+      this.errorMeasure.add(new Option(measure, measure)); // a measure this page does not list
+    }
+    if (measure) this.errorMeasure.value = measure;
     if (Number.isFinite(triangles)) {
       this.budget.value = String(Math.log10(triangles));
       this.#showBudget(triangles);
