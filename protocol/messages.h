@@ -74,7 +74,7 @@ using Parameters = std::map<std::string, double>;
 struct Constraints {
     std::optional<std::uint64_t> triangles;    ///< triangle budget, >= 1
     std::optional<double> max_error;           ///< error bound, finite and >= 0
-    std::optional<std::string> error_measure;  ///< e.g. "epsilon4", "distance"
+    std::optional<std::string> error_measure;  ///< "distance", "epsilon4", "max_distance"
     friend bool operator==(const Constraints&, const Constraints&) = default;
 };
 
