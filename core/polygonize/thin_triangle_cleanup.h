@@ -1,0 +1,51 @@
+// The "mid-phase simplification" of thesis 3.3.4: Marching Cubes with vertices on the surface
+// leaves thin, nearly degenerate triangles (a vertex close to a lattice corner, or close to the
+// middle of another triangle's edge), which refinement would waste splits on. They are removed by
+// topology-preserving edge collapses and edge flips.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "mesh/mesh.h"
+
+namespace isomesh {
+
+struct ThinTriangleSettings {
+    /// Edges shorter than this are collapsed (a fraction of the lattice step suits).
+    double min_edge_length = 0.0;
+    /// Triangles of lower quality 4 sqrt(3) area / (sum of squared edge lengths) (1 for an
+    /// equilateral triangle, 0 for a degenerate one) are collapsed or flipped.
+    double min_quality = 0.1;
+};
+
+struct ThinTriangleReport {
+    std::size_t collapses = 0;
+    std::size_t flips = 0;
+    /// Triangles still below the settings' thresholds (no valid operation fixed them).
+    std::size_t remaining_thin = 0;
+    /// Of those, triangles of zero area (|cross product| <= 1e-14 * longest edge^2).
+    std::size_t remaining_degenerate = 0;
+};
+
+/// Removes thin triangles from `mesh` (positions, normals, triangles; adjacency is not kept, so
+/// neighbours and base_edge are cleared) and compacts it, keeping the order of what remains.
+///
+/// An edge u-v collapses by moving v onto u, so every remaining vertex keeps its position (on the
+/// surface) and its normal. A collapse is refused when it would change the topology (the link
+/// condition of Dey, Edelsbrunner, Guha & Nekhayev, "Topology preserving edge contraction", 1999:
+/// the common neighbours of u and v are exactly the third vertices of the triangles on u-v; and
+/// no interior edge between two boundary vertices), when v lies on a face of the meshing box that
+/// u does not (`box_faces[v]`: bit 2 * axis + side), so the boundary stays on the box, or when a
+/// triangle around v would flip over or become degenerate. A cap (a triangle with an angle above
+/// 120 degrees) is first tried with a flip of its longest edge.
+/// Deterministic: triangles are visited in index order, then those whose shape changed.
+/// Preconditions: mesh manifold and consistently oriented; box_faces.size() == vertex_count().
+ThinTriangleReport remove_thin_triangles(Mesh& mesh, std::span<const std::uint8_t> box_faces,
+                                         const ThinTriangleSettings& settings);
+
+/// 4 sqrt(3) area / (sum of squared edge lengths) of the triangle a, b, c.
+double triangle_quality(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c);
+
+}  // namespace isomesh
