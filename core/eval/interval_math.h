@@ -26,7 +26,7 @@ Interval hull(const Interval& a, const Interval& b);
 IntervalValue interval_constant(double value);
 
 /// Enclosure of unary `op` over `a`; `imm` is the instruction's immediate (PowInt's exponent).
-/// Precondition: op_arity(op) == 1.
+/// Preconditions: op_arity(op) == 1; for PowInt, imm is a whole number within the range of int.
 IntervalValue interval_unary(Op op, const IntervalValue& a, double imm);
 
 /// Enclosure of binary `op` over a x b. Precondition: op_arity(op) == 2.
