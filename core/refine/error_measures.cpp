@@ -4,7 +4,9 @@
 #include "refine/error_measures.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
+#include <vector>
 
 #include <glm/geometric.hpp>
 
@@ -22,6 +24,21 @@ double squared_length(const glm::dvec3& v) {
     return glm::dot(v, v);
 }
 
+double longest_edge(const TriangleGeometry& t) {
+    return std::sqrt(std::max(
+        {squared_length(t.b - t.a), squared_length(t.c - t.b), squared_length(t.a - t.c)}));
+}
+
+// Newton along the gradient first (it lands near the nearest point, which a distance needs), then
+// the search line `hint` if that fails.
+Projection nearest_surface_point(Evaluator& evaluator, const glm::dvec3& p, const glm::dvec3& hint,
+                                 double scale, const ProjectionSettings& settings) {
+    const Projection newton =
+        project_to_surface(evaluator, {p, glm::dvec3(0.0), 0.0, scale, -1}, settings);
+    if (newton.on_surface()) return newton;
+    return project_to_surface(evaluator, {p, hint, 0.0, scale, -1}, settings);
+}
+
 }  // namespace
 
 double epsilon4_error(const TriangleGeometry& t) {
@@ -30,19 +47,69 @@ double epsilon4_error(const TriangleGeometry& t) {
     return std::isfinite(volume) ? volume : 0.0;
 }
 
-double largest_sample_distance(Evaluator& evaluator, const TriangleGeometry& t) {
-    double distance = glm::length(t.projected_midpoint - 0.5 * (t.a + t.b));
-    distance = std::max(distance, first_order_distance(evaluator, (t.a + t.b + t.c) / 3.0));
-    distance = std::max(distance, first_order_distance(evaluator, 0.5 * (t.b + t.c)));
-    distance = std::max(distance, first_order_distance(evaluator, 0.5 * (t.c + t.a)));
-    return std::isfinite(distance) ? distance : 0.0;
+void ErrorMeasure::triangle_errors(Evaluator& evaluator,
+                                   std::span<const TriangleGeometry> triangles,
+                                   std::span<double> errors) const {
+    assert(triangles.size() == errors.size());
+    for (std::size_t i = 0; i < triangles.size(); ++i)
+        errors[i] = triangle_error(evaluator, triangles[i]);
+}
+
+void largest_sample_distances(Evaluator& evaluator, std::span<const TriangleGeometry> triangles,
+                              std::span<double> distances) {
+    assert(triangles.size() == distances.size());
+    // Two samples per triangle: the base midpoint and the centroid.
+    thread_local std::vector<double> x, y, z, f;
+    x.clear();
+    y.clear();
+    z.clear();
+    for (const TriangleGeometry& t : triangles) {
+        for (const glm::dvec3& p : {0.5 * (t.a + t.b), (t.a + t.b + t.c) / 3.0}) {
+            x.push_back(p.x);
+            y.push_back(p.y);
+            z.push_back(p.z);
+        }
+    }
+    f.resize(x.size());
+    evaluator.values({x, y, z}, f);
+    for (std::size_t i = 0; i < triangles.size(); ++i) {
+        double distance = 0.0;
+        for (std::size_t k = 2 * i; k < 2 * i + 2; ++k) {
+            const double g = triangles[i].gradient_norm;
+            const double d =
+                g > 0.0 ? std::abs(f[k]) / g : first_order_distance(evaluator, {x[k], y[k], z[k]});
+            if (std::isfinite(d)) distance = std::max(distance, d);
+        }
+        distances[i] = distance;
+    }
+}
+
+void DistanceError::triangle_errors(Evaluator& evaluator,
+                                    std::span<const TriangleGeometry> triangles,
+                                    std::span<double> errors) const {
+    largest_sample_distances(evaluator, triangles, errors);
+    for (std::size_t i = 0; i < triangles.size(); ++i) {
+        const double error = errors[i] * longest_edge(triangles[i]);
+        errors[i] = std::isfinite(error) ? error : 0.0;
+    }
 }
 
 double DistanceError::triangle_error(Evaluator& evaluator, const TriangleGeometry& t) const {
-    const double longest = std::sqrt(std::max(
-        {squared_length(t.b - t.a), squared_length(t.c - t.b), squared_length(t.a - t.c)}));
-    const double error = largest_sample_distance(evaluator, t) * longest;
-    return std::isfinite(error) ? error : 0.0;
+    double error = 0.0;
+    triangle_errors(evaluator, {&t, 1}, {&error, 1});
+    return error;
+}
+
+void MaxDistanceError::triangle_errors(Evaluator& evaluator,
+                                       std::span<const TriangleGeometry> triangles,
+                                       std::span<double> errors) const {
+    largest_sample_distances(evaluator, triangles, errors);
+}
+
+double MaxDistanceError::triangle_error(Evaluator& evaluator, const TriangleGeometry& t) const {
+    double error = 0.0;
+    triangle_errors(evaluator, {&t, 1}, {&error, 1});
+    return error;
 }
 
 std::shared_ptr<const ErrorMeasure> make_error_measure(std::string_view name) {
@@ -80,14 +147,14 @@ MeshErrorReport measure_mesh_error(const Mesh& mesh, Evaluator& evaluator, int s
                 ? mesh.normals[tri[0]] + mesh.normals[tri[1]] + mesh.normals[tri[2]]
                 : normal;
         const Projection mid =
-            project_to_surface(evaluator, {0.5 * (a + b), hint, scale, -1}, projection);
+            nearest_surface_point(evaluator, 0.5 * (a + b), hint, scale, projection);
         report.epsilon4_total += epsilon4_error({a, b, c, mid.position});
         for (int i = 0; i <= n; ++i) {
             for (int j = 0; i + j <= n; ++j) {
                 const double u = double(i) / n, v = double(j) / n;
                 const glm::dvec3 q = a + u * (b - a) + v * (c - a);
                 const Projection proj =
-                    project_to_surface(evaluator, {q, hint, scale, -1}, projection);
+                    nearest_surface_point(evaluator, q, hint, scale, projection);
                 if (!proj.on_surface()) {
                     ++report.failed_projections;
                     continue;

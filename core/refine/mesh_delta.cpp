@@ -6,76 +6,55 @@
 namespace isomesh {
 namespace {
 
-template <typename T, typename Key>
-void sort_by(std::vector<T>& items, Key key) {
-    std::sort(items.begin(), items.end(), [&](const T& a, const T& b) { return key(a) < key(b); });
-}
-
 std::string describe(const char* what, std::uint32_t id) {
     return std::string(what) + " " + std::to_string(id);
 }
 
 }  // namespace
 
-void DeltaBuilder::add_vertex(const DeltaVertex& vertex) {
-    assert(!vertices_.contains(vertex.id) && "vertex ids are never reused");
-    vertices_[vertex.id] = {Change::Added, vertex};
-}
-
-void DeltaBuilder::move_vertex(const DeltaVertex& vertex) {
-    auto [it, inserted] = vertices_.try_emplace(vertex.id, VertexChange{Change::Moved, vertex});
-    if (inserted) return;
-    assert(it->second.change != Change::Removed && "moving a removed vertex");
-    it->second.vertex = vertex;  // an added vertex stays added, at its new place
-}
-
-void DeltaBuilder::remove_vertex(std::uint32_t id) {
-    auto it = vertices_.find(id);
-    if (it != vertices_.end() && it->second.change == Change::Added) {
-        vertices_.erase(it);  // created and removed within this delta
-        return;
-    }
-    vertices_[id] = {Change::Removed, DeltaVertex{id, {}, {}}};
-}
-
-void DeltaBuilder::add_triangle(const DeltaTriangle& triangle) {
-    auto it = triangles_.find(triangle.id);
-    if (it != triangles_.end()) {
-        assert(it->second.change == Change::Removed);
-        triangles_.erase(it);  // removed and restored (same id, same vertices): no change
-        return;
-    }
-    triangles_[triangle.id] = {Change::Added, triangle};
-}
-
-void DeltaBuilder::remove_triangle(std::uint32_t id) {
-    auto it = triangles_.find(id);
-    if (it != triangles_.end()) {
-        assert(it->second.change == Change::Added);
-        triangles_.erase(it);  // created and removed within this delta
-        return;
-    }
-    triangles_[id] = {Change::Removed, DeltaTriangle{id, {}}};
-}
-
 MeshDelta DeltaBuilder::take() {
     MeshDelta delta;
-    for (const auto& [id, c] : vertices_) {
-        if (c.change == Change::Added) delta.added_vertices.push_back(c.vertex);
-        if (c.change == Change::Moved) delta.moved_vertices.push_back(c.vertex);
-        if (c.change == Change::Removed) delta.removed_vertices.push_back(id);
+    // Net vertex changes: added (then maybe moved) -> added at its last place, unless removed;
+    // moved -> moved to its last place, unless removed; removed -> removed.
+    std::stable_sort(
+        vertices_.begin(), vertices_.end(),
+        [](const VertexChange& a, const VertexChange& b) { return a.vertex.id < b.vertex.id; });
+    for (std::size_t i = 0; i < vertices_.size();) {
+        std::size_t j = i;
+        while (j < vertices_.size() && vertices_[j].vertex.id == vertices_[i].vertex.id) ++j;
+        const VertexChange& first = vertices_[i];
+        const VertexChange& last = vertices_[j - 1];
+        assert(std::count_if(vertices_.begin() + i, vertices_.begin() + j, [](const auto& c) {
+                   return c.change == Change::Added;
+               }) <= (first.change == Change::Added ? 1 : 0));
+        if (last.change == Change::Removed) {
+            if (first.change != Change::Added) delta.removed_vertices.push_back(first.vertex.id);
+        } else if (first.change == Change::Added) {
+            delta.added_vertices.push_back(last.vertex);
+        } else {
+            delta.moved_vertices.push_back(last.vertex);
+        }
+        i = j;
     }
-    for (const auto& [id, c] : triangles_) {
-        if (c.change == Change::Added) delta.added_triangles.push_back(c.triangle);
-        if (c.change == Change::Removed) delta.removed_triangles.push_back(id);
+    // Net triangle changes: an id always names the same vertices, so only the first and the last
+    // change matter (add..add: added; remove..remove: removed; otherwise no change).
+    std::stable_sort(triangles_.begin(), triangles_.end(),
+                     [](const TriangleChange& a, const TriangleChange& b) {
+                         return a.triangle.id < b.triangle.id;
+                     });
+    for (std::size_t i = 0; i < triangles_.size();) {
+        std::size_t j = i;
+        while (j < triangles_.size() && triangles_[j].triangle.id == triangles_[i].triangle.id) ++j;
+        const TriangleChange& first = triangles_[i];
+        const TriangleChange& last = triangles_[j - 1];
+        if (first.change == last.change) {
+            if (first.change == Change::Added)
+                delta.added_triangles.push_back(first.triangle);
+            else
+                delta.removed_triangles.push_back(first.triangle.id);
+        }
+        i = j;
     }
-    auto id_of = [](const auto& item) { return item.id; };
-    auto self = [](std::uint32_t id) { return id; };
-    sort_by(delta.added_vertices, id_of);
-    sort_by(delta.moved_vertices, id_of);
-    sort_by(delta.added_triangles, id_of);
-    sort_by(delta.removed_vertices, self);
-    sort_by(delta.removed_triangles, self);
     vertices_.clear();
     triangles_.clear();
     return delta;

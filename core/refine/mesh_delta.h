@@ -45,15 +45,20 @@ struct MeshDelta {
     }
 };
 
-/// Accumulates changes as they happen and produces the net delta.
+/// Accumulates changes as they happen and produces the net delta. Changes are logged in order and
+/// netted per id when the delta is taken (a stable sort by id: no hashing on the refiner's path).
 class DeltaBuilder {
   public:
-    void add_vertex(const DeltaVertex& vertex);
-    void move_vertex(const DeltaVertex& vertex);
-    void remove_vertex(std::uint32_t id);
-    void add_triangle(const DeltaTriangle& triangle);
-    void remove_triangle(std::uint32_t id);
-    /// The net delta since construction or the last take(); resets the builder.
+    void add_vertex(const DeltaVertex& vertex) { vertices_.push_back({Change::Added, vertex}); }
+    void move_vertex(const DeltaVertex& vertex) { vertices_.push_back({Change::Moved, vertex}); }
+    void remove_vertex(std::uint32_t id) { vertices_.push_back({Change::Removed, {id, {}, {}}}); }
+    void add_triangle(const DeltaTriangle& triangle) {
+        triangles_.push_back({Change::Added, triangle});
+    }
+    void remove_triangle(std::uint32_t id) { triangles_.push_back({Change::Removed, {id, {}}}); }
+    /// The net delta since construction or the last take(); resets the builder. Preconditions
+    /// (asserted): a vertex id is added at most once and not changed after its removal; a triangle
+    /// id alternates between additions and removals.
     MeshDelta take();
 
   private:
@@ -66,8 +71,8 @@ class DeltaBuilder {
         Change change;
         DeltaTriangle triangle;
     };
-    std::unordered_map<std::uint32_t, VertexChange> vertices_;
-    std::unordered_map<std::uint32_t, TriangleChange> triangles_;
+    std::vector<VertexChange> vertices_;
+    std::vector<TriangleChange> triangles_;
 };
 
 /// A mesh keyed by ids, built by applying deltas in order (what a client holds).

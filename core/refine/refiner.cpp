@@ -30,6 +30,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 
@@ -49,6 +50,7 @@ struct Vertex {
     std::uint32_t id = 0;
     glm::dvec3 position{0.0};
     glm::dvec3 normal{0.0};
+    double gradient_norm = 0.0;  // |grad f| at position; 0 when unknown
     double scale = 0.0;  // the length of the edge it bisected (phase-1: shortest incident edge)
     std::uint64_t version = 0;
     std::int8_t fixed_axis = -1;  // on a face of the meshing box: the coordinate that stays
@@ -67,6 +69,7 @@ struct Triangle {
     // The base midpoint projected onto the surface: the vertex a split would create.
     glm::dvec3 candidate{0.0};
     glm::dvec3 candidate_normal{0.0};
+    double candidate_gradient_norm = 0.0;
     bool candidate_on_surface = false;
     std::uint64_t candidate_version = 0;
     double error = 0.0;
@@ -241,13 +244,17 @@ class Refiner::Impl {
     void replace_neighbour(std::uint32_t t, std::uint32_t old_nb, std::uint32_t new_nb);
 
     // --- errors and queues
-    void ensure_candidate(std::uint32_t t);
-    double compute_error(std::uint32_t t, const glm::dvec3& projected_midpoint);
-    double ensure_error(std::uint32_t t);
+    ProjectionRequest candidate_request(std::uint32_t t) const;
+    /// Projects the base midpoints of `tris` that lack a current one (one batched projection).
+    void ensure_candidates(std::span<const std::uint32_t> tris);
+    TriangleGeometry geometry(std::uint32_t t) const;
+    /// Brings the errors of `tris` to the current version (one batched evaluation). A split
+    /// triangle's projected midpoint is the vertex its split created.
+    void ensure_errors(std::span<const std::uint32_t> tris);
+    /// Makes t a leaf; its error must be current.
     void add_leaf(std::uint32_t t);
     void remove_leaf(std::uint32_t t);
-    void refresh_leaf_error(std::uint32_t t);
-    double parent_error(std::uint32_t record, std::uint32_t parent);
+    double parent_error(std::uint32_t parent);
     double merge_priority(std::uint32_t record);
     void child_became_leaf(std::uint32_t record);
     void child_was_split(std::uint32_t record);
@@ -269,7 +276,11 @@ class Refiner::Impl {
 
     // --- function versions
     bool refresh_pending() const;
-    void refresh_one();
+    /// Refreshes up to `limit` (> 0) items of the current stage; returns how many.
+    std::size_t refresh_some(std::size_t limit);
+    void refresh_vertices(std::span<const std::uint32_t> vertices);
+    void refresh_leaves(std::span<const std::uint32_t> leaves);
+    void refresh_records(std::span<const std::uint32_t> records);
     void restart();
 
     RefineSettings settings_;
@@ -294,6 +305,11 @@ class Refiner::Impl {
     DeltaBuilder delta_;
     RefineCounters counters_;
     SplitPlan plan_;  // scratch
+    std::vector<std::uint32_t> stale_, pending_;
+    std::vector<ProjectionRequest> requests_;
+    std::vector<Projection> projections_;
+    std::vector<TriangleGeometry> geometries_;
+    std::vector<double> errors_;
 
     // Refresh after set_field: vertices, then leaves, then mergeable records.
     enum class RefreshStage : std::uint8_t { None, Vertices, Leaves, Records };
@@ -323,9 +339,10 @@ void Refiner::Impl::load(const Mesh& input) {
         Vertex& V = vertices_[slot];
         V.id = next_vertex_id_++;
         V.position = mesh.positions[v];
+        const glm::dvec3 gradient = evaluator_->value_gradient(V.position).gradient;
         V.normal = mesh.normals.empty() ? glm::dvec3(0.0) : mesh.normals[v];
-        if (V.normal == glm::dvec3(0.0) || !finite(V.normal))
-            V.normal = unit_or_zero(evaluator_->value_gradient(V.position).gradient);
+        if (V.normal == glm::dvec3(0.0) || !finite(V.normal)) V.normal = unit_or_zero(gradient);
+        V.gradient_norm = finite(gradient) ? glm::length(gradient) : 0.0;
         V.scale = std::numeric_limits<double>::infinity();
         V.version = version_;
         V.alive = true;
@@ -360,6 +377,7 @@ void Refiner::Impl::load(const Mesh& input) {
         }
     }
     root_edge_length_ = mesh.triangles.empty() ? 0.0 : edge_sum / (3.0 * mesh.triangles.size());
+    ensure_errors(tri_slot);
     for (std::uint32_t slot : tri_slot) add_leaf(slot);
 }
 
@@ -403,51 +421,89 @@ void Refiner::Impl::replace_neighbour(std::uint32_t t, std::uint32_t old_nb, std
 // ---------------------------------------------------------------------------------------------
 // Errors and queues
 
-void Refiner::Impl::ensure_candidate(std::uint32_t t) {
-    Triangle& T = triangles_[t];
-    if (T.candidate_version == version_) return;
-    const std::uint32_t n = T.nb[T.base];
-    if (is_diamond(t, n) && triangles_[n].candidate_version == version_) {
-        // Diamond partners share the base edge, hence the candidate (projection is symmetric in
-        // the two endpoints, so either side would compute the same point).
-        const Triangle& N = triangles_[n];
-        T.candidate = N.candidate;
-        T.candidate_normal = N.candidate_normal;
-        T.candidate_on_surface = N.candidate_on_surface;
-        T.candidate_version = version_;
-        return;
-    }
+ProjectionRequest Refiner::Impl::candidate_request(std::uint32_t t) const {
+    const Triangle& T = triangles_[t];
     const Vertex& a = vertices_[T.v[T.base]];
     const Vertex& b = vertices_[T.v[(T.base + 1) % 3]];
+    // Symmetric in a and b, so that both triangles of a diamond compute the same point.
     ProjectionRequest request;
     request.start = 0.5 * (a.position + b.position);
     request.direction = a.normal + b.normal;
+    request.slope = 0.5 * (a.gradient_norm + b.gradient_norm);
     request.scale = glm::length(b.position - a.position);
-    request.fixed_axis = n == kNone ? shared_axis(a.position, b.position) : -1;
+    request.fixed_axis = T.nb[T.base] == kNone ? shared_axis(a.position, b.position) : -1;
     if (!(request.scale > 0.0)) request.scale = settings_.min_edge_length;
-    const Projection p = project_to_surface(*evaluator_, request, settings_.projection);
-    T.candidate = p.position;
-    T.candidate_normal = p.on_surface() ? p.normal : unit_or_zero(request.direction);
-    T.candidate_on_surface = p.on_surface();
-    T.candidate_version = version_;
+    return request;
 }
 
-double Refiner::Impl::compute_error(std::uint32_t t, const glm::dvec3& projected_midpoint) {
+void Refiner::Impl::ensure_candidates(std::span<const std::uint32_t> tris) {
+    pending_.clear();
+    requests_.clear();
+    for (std::uint32_t t : tris) {
+        Triangle& T = triangles_[t];
+        if (T.candidate_version == version_) continue;
+        const std::uint32_t n = T.nb[T.base];
+        if (is_diamond(t, n) && triangles_[n].candidate_version == version_) {
+            const Triangle& N = triangles_[n];  // the diamond partner's is the same point
+            T.candidate = N.candidate;
+            T.candidate_normal = N.candidate_normal;
+            T.candidate_gradient_norm = N.candidate_gradient_norm;
+            T.candidate_on_surface = N.candidate_on_surface;
+            T.candidate_version = version_;
+            continue;
+        }
+        pending_.push_back(t);
+        requests_.push_back(candidate_request(t));
+    }
+    projections_.resize(requests_.size());
+    project_to_surface(*evaluator_, requests_, projections_, settings_.projection);
+    for (std::size_t i = 0; i < pending_.size(); ++i) {
+        Triangle& T = triangles_[pending_[i]];
+        const Projection& p = projections_[i];
+        T.candidate = p.position;
+        T.candidate_normal = p.on_surface() ? p.normal : unit_or_zero(requests_[i].direction);
+        T.candidate_gradient_norm = p.gradient_norm;
+        T.candidate_on_surface = p.on_surface();
+        T.candidate_version = version_;
+    }
+}
+
+TriangleGeometry Refiner::Impl::geometry(std::uint32_t t) const {
     const Triangle& T = triangles_[t];
-    const TriangleGeometry geometry{position(t, T.base), position(t, T.base + 1),
-                                    position(t, T.base + 2), projected_midpoint};
-    const double error = settings_.error_measure->triangle_error(*evaluator_, geometry);
-    return error >= 0.0 ? error : 0.0;  // NaN and negative values from a custom measure
+    double gradient_norm = 0.0;  // the mean over the corners, or 0 if one is unknown
+    for (std::uint32_t v : T.v) {
+        const double g = vertices_[v].gradient_norm;
+        gradient_norm = g > 0.0 && gradient_norm >= 0.0 ? gradient_norm + g / 3.0 : -1.0;
+    }
+    const glm::dvec3 midpoint = T.state == TriangleState::Split
+                                    ? vertices_[records_[T.split].vertex].position
+                                    : T.candidate;
+    return {position(t, T.base), position(t, T.base + 1), position(t, T.base + 2), midpoint,
+            std::max(gradient_norm, 0.0)};
 }
 
-double Refiner::Impl::ensure_error(std::uint32_t t) {
-    Triangle& T = triangles_[t];
-    if (T.error_version != version_) {
-        ensure_candidate(t);
-        T.error = compute_error(t, T.candidate);
+void Refiner::Impl::ensure_errors(std::span<const std::uint32_t> tris) {
+    stale_.clear();
+    for (std::uint32_t t : tris)
+        if (triangles_[t].error_version != version_) stale_.push_back(t);
+    if (stale_.empty()) return;
+    // The base midpoint is projected here only for measures that read it; otherwise only when
+    // the triangle is split.
+    if (settings_.error_measure->needs_projected_midpoint()) {
+        std::vector<std::uint32_t> leaves;
+        for (std::uint32_t t : stale_)
+            if (triangles_[t].state != TriangleState::Split) leaves.push_back(t);
+        ensure_candidates(leaves);
+    }
+    geometries_.clear();
+    for (std::uint32_t t : stale_) geometries_.push_back(geometry(t));
+    errors_.resize(stale_.size());
+    settings_.error_measure->triangle_errors(*evaluator_, geometries_, errors_);
+    for (std::size_t i = 0; i < stale_.size(); ++i) {
+        Triangle& T = triangles_[stale_[i]];
+        T.error = errors_[i] >= 0.0 ? errors_[i] : 0.0;  // NaN or negative from a custom measure
         T.error_version = version_;
     }
-    return T.error;
 }
 
 void Refiner::Impl::add_leaf(std::uint32_t t) {
@@ -455,7 +511,8 @@ void Refiner::Impl::add_leaf(std::uint32_t t) {
     T.state = TriangleState::Leaf;
     T.split = kNone;
     ++leaf_count_;
-    const double error = ensure_error(t);
+    assert(T.error_version == version_);
+    const double error = T.error;
     total_error_.add(error);
     PriorityQueue& queue =
         base_length(t) < settings_.min_edge_length ? *blocked_queue_ : *split_queue_;
@@ -475,28 +532,17 @@ void Refiner::Impl::remove_leaf(std::uint32_t t) {
     delta_.remove_triangle(T.id);
 }
 
-void Refiner::Impl::refresh_leaf_error(std::uint32_t t) {
-    const double old_error = triangles_[t].error;
-    const double error = ensure_error(t);
-    total_error_.add(error - old_error);
-    PriorityQueue& queue = split_queue_->contains(t) ? *split_queue_ : *blocked_queue_;
-    queue.update(t, error);
-}
-
-double Refiner::Impl::parent_error(std::uint32_t record, std::uint32_t parent) {
-    Triangle& P = triangles_[parent];
-    if (P.error_version != version_) {
-        // A split triangle's base midpoint projection is the vertex its split created.
-        P.error = compute_error(parent, vertices_[records_[record].vertex].position);
-        P.error_version = version_;
-    }
-    return P.error;
+double Refiner::Impl::parent_error(std::uint32_t parent) {
+    ensure_errors({&parent, 1});
+    return triangles_[parent].error;
 }
 
 double Refiner::Impl::merge_priority(std::uint32_t record) {
     const SplitRecord& R = records_[record];
-    double priority = parent_error(record, R.parents[0]);
-    if (R.parents[1] != kNone) priority = std::max(priority, parent_error(record, R.parents[1]));
+    const std::size_t n = R.parents[1] == kNone ? 1 : 2;
+    ensure_errors({R.parents.data(), n});
+    double priority = triangles_[R.parents[0]].error;
+    if (n == 2) priority = std::max(priority, triangles_[R.parents[1]].error);
     return priority;
 }
 
@@ -562,8 +608,9 @@ std::uint32_t Refiner::Impl::make_child(std::uint32_t record, std::array<std::ui
 }
 
 void Refiner::Impl::bisect(std::uint32_t t, std::uint32_t n) {
-    ensure_error(t);
-    if (n != kNone) ensure_error(n);
+    const std::array<std::uint32_t, 2> pair{t, n};
+    ensure_errors({pair.data(), n == kNone ? 1u : 2u});
+    ensure_candidates({&t, 1});
     const std::uint32_t record = records_.allocate();
     const std::uint32_t m = vertices_.allocate();
     {
@@ -572,6 +619,7 @@ void Refiner::Impl::bisect(std::uint32_t t, std::uint32_t n) {
         M.id = next_vertex_id_++;
         M.position = T.candidate;
         M.normal = T.candidate_normal;
+        M.gradient_norm = T.candidate_gradient_norm;
         M.on_surface = T.candidate_on_surface;
         M.scale = base_length(t);
         M.version = version_;
@@ -619,8 +667,9 @@ void Refiner::Impl::bisect(std::uint32_t t, std::uint32_t n) {
     R.children = children;
     R.split_children = 0;
     R.alive = true;
-    for (std::uint32_t c : children)
-        if (c != kNone) add_leaf(c);
+    const std::size_t child_count = n == kNone ? 2 : 4;
+    ensure_errors({children.data(), child_count});
+    for (std::size_t i = 0; i < child_count; ++i) add_leaf(children[i]);
     merge_queue_->insert(record, merge_priority(record));
     ++counters_.splits;
 }
@@ -648,6 +697,7 @@ void Refiner::Impl::merge(std::uint32_t record) {
         // The removed vertex is the parent's projected base midpoint.
         P.candidate = M.position;
         P.candidate_normal = M.normal;
+        P.candidate_gradient_norm = M.gradient_norm;
         P.candidate_on_surface = M.on_surface;
         P.candidate_version = M.version;
     }
@@ -663,6 +713,8 @@ void Refiner::Impl::merge(std::uint32_t record) {
     records_.release(record);
     for (std::uint32_t p : R.parents) {
         if (p == kNone) continue;
+        triangles_[p].state = TriangleState::Leaf;  // its midpoint is now its candidate
+        ensure_errors({&p, 1});
         add_leaf(p);
         child_became_leaf(triangles_[p].parent);
     }
@@ -680,7 +732,7 @@ MeshStats Refiner::Impl::stats_after_merge(const MeshStats& stats, std::uint32_t
     for (std::uint32_t p : R.parents) {
         if (p == kNone) continue;
         ++after.triangles;
-        const double e = parent_error(record, p);
+        const double e = parent_error(p);
         after.total_error += e;
         after.max_error = std::max(after.max_error, e);  // an upper bound: children leave
     }
@@ -716,6 +768,11 @@ bool Refiner::Impl::find_split(const MeshStats& stats, SplitPlan& plan, double m
     SplitPlan smallest;
     smallest.added_triangles = has_boundary_ ? 1 : 2;
     if (!acceptable_split(stats, smallest)) return false;
+    // The common case: the top of the queue fits.
+    const std::uint32_t top = split_queue_->top();
+    if (top == kNone || !(split_queue_->priority(top) > min_priority)) return false;
+    if (plan_split(top, plan) && !conflicts(plan, avoid_record) && acceptable_split(stats, plan))
+        return true;
     bool found = false;
     split_queue_->visit_in_order([&](std::uint32_t t) {
         if (!(split_queue_->priority(t) > min_priority)) return true;  // nothing better follows
@@ -788,7 +845,7 @@ bool Refiner::Impl::refresh_pending() const {
     return refresh_stage_ != RefreshStage::None;
 }
 
-void Refiner::Impl::refresh_one() {
+std::size_t Refiner::Impl::refresh_some(std::size_t limit) {
     while (refresh_next_ == refresh_list_.size()) {
         refresh_list_.clear();
         refresh_next_ = 0;
@@ -802,37 +859,80 @@ void Refiner::Impl::refresh_one() {
                 if (merge_queue_->contains(r)) refresh_list_.push_back(r);
         } else {
             refresh_stage_ = RefreshStage::None;
-            return;
+            return 0;
         }
     }
-    const std::uint32_t item = refresh_list_[refresh_next_++];
-    if (refresh_stage_ == RefreshStage::Vertices) {
-        Vertex& V = vertices_[item];
+    // Items are refreshed in batches (batched evaluations); each item's result does not depend
+    // on the batch it is in, so neither does the mesh depend on the step sizes.
+    constexpr std::size_t kBatch = 256;
+    const std::size_t count = std::min({limit, kBatch, refresh_list_.size() - refresh_next_});
+    const std::span<const std::uint32_t> items(refresh_list_.data() + refresh_next_, count);
+    refresh_next_ += count;
+    if (refresh_stage_ == RefreshStage::Vertices)
+        refresh_vertices(items);
+    else if (refresh_stage_ == RefreshStage::Leaves)
+        refresh_leaves(items);
+    else
+        refresh_records(items);
+    return count;
+}
+
+void Refiner::Impl::refresh_vertices(std::span<const std::uint32_t> items) {
+    requests_.clear();
+    for (std::uint32_t v : items) {
+        const Vertex& V = vertices_[v];
         ProjectionRequest request;
         request.start = V.position;
         request.direction = V.normal;
+        request.slope = V.gradient_norm;
         // The phase-1 edge length bounds how far a vertex may travel: beyond it the phase-1
         // topology guarantee says nothing, and the fresh phase-1 mesh takes over.
         request.scale = 2.0 * std::max(root_edge_length_, V.scale);
         request.fixed_axis = V.fixed_axis;
-        const Projection p = project_to_surface(*evaluator_, request, settings_.projection);
+        requests_.push_back(request);
+    }
+    projections_.resize(requests_.size());
+    project_to_surface(*evaluator_, requests_, projections_, settings_.projection);
+    for (std::size_t i = 0; i < items.size(); ++i) {
+        Vertex& V = vertices_[items[i]];
+        const Projection& p = projections_[i];
         if (p.on_surface()) {
             V.position = p.position;
             V.normal = p.normal;
+            V.gradient_norm = p.gradient_norm;
         } else {
             ++counters_.failed_refreshes;
             if (fresh_phase1_) restart_pending_ = true;
         }
         V.on_surface = p.on_surface();
         V.version = version_;
-        delta_.move_vertex(delta_vertex(item));
-        ++counters_.refreshed_vertices;
-    } else if (refresh_stage_ == RefreshStage::Leaves) {
-        refresh_leaf_error(item);
-        ++counters_.refreshed_triangles;
-    } else {
-        merge_queue_->update(item, merge_priority(item));
+        delta_.move_vertex(delta_vertex(items[i]));
     }
+    counters_.refreshed_vertices += items.size();
+}
+
+void Refiner::Impl::refresh_leaves(std::span<const std::uint32_t> items) {
+    std::vector<double> old_errors;
+    old_errors.reserve(items.size());
+    for (std::uint32_t t : items) old_errors.push_back(triangles_[t].error);
+    ensure_errors(items);
+    for (std::size_t i = 0; i < items.size(); ++i) {
+        const std::uint32_t t = items[i];
+        const double error = triangles_[t].error;
+        total_error_.add(error - old_errors[i]);
+        PriorityQueue& queue = split_queue_->contains(t) ? *split_queue_ : *blocked_queue_;
+        queue.update(t, error);
+    }
+    counters_.refreshed_triangles += items.size();
+}
+
+void Refiner::Impl::refresh_records(std::span<const std::uint32_t> items) {
+    std::vector<std::uint32_t> parents;
+    for (std::uint32_t r : items)
+        for (std::uint32_t p : records_[r].parents)
+            if (p != kNone) parents.push_back(p);
+    ensure_errors(parents);
+    for (std::uint32_t r : items) merge_queue_->update(r, merge_priority(r));
 }
 
 void Refiner::Impl::restart() {
@@ -869,9 +969,9 @@ StepResult Refiner::Impl::step(const StepBudget& budget, bool take) {
             result.restarted = true;
             ++operations;
         } else if (refresh_pending()) {
-            refresh_one();
-            ++result.refreshed;
-            ++operations;
+            const std::size_t done = refresh_some(budget.operations - operations);
+            result.refreshed += done;
+            operations += done;
         } else if (const std::size_t done = act(); done > 0) {
             operations += done;
         } else {

@@ -4,7 +4,10 @@
 // Jarratt, "A modified regula falsi method for computing the root of an equation", BIT 11, 1971.
 #include "refine/surface_projection.h"
 
+#include <algorithm>
+#include <cassert>
 #include <cmath>
+#include <vector>
 
 #include <glm/geometric.hpp>
 
@@ -25,6 +28,61 @@ glm::dvec3 unit_or_zero(const glm::dvec3& v) {
     return length > 0.0 && std::isfinite(length) ? v / length : glm::dvec3(0.0);
 }
 
+}  // namespace
+
+SecantSearch::SecantSearch(const ProjectionRequest& request, const ProjectionSettings& settings)
+    : start_(request.start),
+      direction_(unit_or_zero(without_axis(request.direction, request.fixed_axis))),
+      slope_(request.slope),
+      radius_(settings.max_displacement * request.scale),
+      tolerance_(settings.tolerance * request.scale),
+      max_steps_(settings.max_secant_steps) {
+    const bool usable =
+        direction_ != glm::dvec3(0.0) && max_steps_ > 0 && radius_ > 0.0 && finite(start_);
+    phase_ = usable ? Phase::Start : Phase::Failed;
+}
+
+void SecantSearch::feed(double f) {
+    assert(wants_value());
+    ++evaluations_;
+    if (phase_ == Phase::Start) {
+        start_value_ = t0_f_ = f;
+        if (!std::isfinite(f)) {
+            phase_ = Phase::Failed;
+        } else if (f == 0.0) {
+            phase_ = Phase::Found;
+        } else {
+            // The first step: Newton's with the slope estimate, or a short probe downhill (the
+            // direction points roughly outward, towards f > 0).
+            const double probe = f > 0.0 ? -1e-3 * radius_ : 1e-3 * radius_;
+            t1_ = slope_ > 0.0 ? -f / slope_ : probe;
+            t1_ = std::clamp(t1_, -0.5 * radius_, 0.5 * radius_);
+            phase_ = Phase::Iterating;
+        }
+        return;
+    }
+    if (!std::isfinite(f) || std::abs(t1_) > radius_) {
+        phase_ = Phase::Failed;
+        return;
+    }
+    const double slope = f != t0_f_ && t1_ != t0_ ? std::abs((f - t0_f_) / (t1_ - t0_)) : 0.0;
+    if (f == 0.0 || (slope > 0.0 && std::abs(f) <= tolerance_ * slope) || steps_ == max_steps_) {
+        phase_ = Phase::Found;  // converged, or out of steps: the gradient check decides
+        return;
+    }
+    if (!(slope > 0.0)) {
+        phase_ = Phase::Failed;
+        return;
+    }
+    const double t2 = t1_ - f * (t1_ - t0_) / (f - t0_f_);
+    t0_ = t1_;
+    t0_f_ = f;
+    t1_ = t2;
+    ++steps_;
+}
+
+namespace {
+
 class Projector {
   public:
     Projector(Evaluator& evaluator, const ProjectionRequest& request,
@@ -37,6 +95,17 @@ class Projector {
 
     Projection run() {
         if (!(radius_ > 0.0) || !finite(request_.start)) return failed();
+        SecantSearch search(request_, settings_);
+        while (search.wants_value()) search.feed(evaluator_.value(search.next_point()));
+        return run_after_secant(search);
+    }
+
+    // The stages after the secant search (which may have run in a batch).
+    Projection run_after_secant(const SecantSearch& search) {
+        evaluations_ += search.evaluations();
+        if (!(radius_ > 0.0) || !finite(request_.start)) return failed();
+        start_value_ = search.start_value();
+        if (search.found() && check(search.point(), ProjectionMethod::Secant)) return result_;
         if (newton()) return result_;
         if (bracketing()) return result_;
         return failed();
@@ -54,19 +123,32 @@ class Projector {
     }
 
     bool succeed(const glm::dvec3& p, const glm::dvec3& gradient, ProjectionMethod method) {
-        result_ = Projection{p, unit_or_zero(gradient), method, evaluations_};
+        const double norm = glm::length(gradient);
+        result_ = Projection{p, unit_or_zero(gradient), std::isfinite(norm) ? norm : 0.0, method,
+                             evaluations_};
         return true;
     }
 
     Projection failed() const {
-        return Projection{request_.start, glm::dvec3(0.0), ProjectionMethod::Failed, evaluations_};
+        return Projection{request_.start, glm::dvec3(0.0), 0.0, ProjectionMethod::Failed,
+                          evaluations_};
+    }
+
+    // Along a line at an angle to the normal the slope understates |grad f|, so the distance is
+    // checked with the gradient, which also gives the normal.
+    bool check(const glm::dvec3& p, ProjectionMethod method) {
+        const ValueGradient vg = evaluate(p);
+        const double g = glm::length(without_axis(vg.gradient, request_.fixed_axis));
+        if (!std::isfinite(vg.value) || !(g > 0.0) || !(std::abs(vg.value) <= tolerance_ * g))
+            return false;
+        return succeed(p, vg.gradient, method);
     }
 
     bool newton() {
         glm::dvec3 p = request_.start;
         for (int step = 0; step <= settings_.max_newton_steps; ++step) {
             const ValueGradient vg = evaluate(p);
-            if (step == 0) start_value_ = vg.value;
+            if (step == 0 && !std::isfinite(start_value_)) start_value_ = vg.value;
             const glm::dvec3 g = without_axis(vg.gradient, request_.fixed_axis);
             const double gg = glm::dot(g, g);
             if (!std::isfinite(vg.value) || !finite(vg.gradient) || !(gg > 0.0)) return false;
@@ -153,6 +235,40 @@ class Projector {
 Projection project_to_surface(Evaluator& evaluator, const ProjectionRequest& request,
                               const ProjectionSettings& settings) {
     return Projector(evaluator, request, settings).run();
+}
+
+void project_to_surface(Evaluator& evaluator, std::span<const ProjectionRequest> requests,
+                        std::span<Projection> out, const ProjectionSettings& settings) {
+    assert(requests.size() == out.size());
+    std::vector<SecantSearch> searches;
+    searches.reserve(requests.size());
+    for (const ProjectionRequest& r : requests) searches.emplace_back(r, settings);
+    // Secant searches in lockstep: one batched evaluation per round.
+    std::vector<std::size_t> active;
+    std::vector<double> x, y, z, f;
+    for (;;) {
+        active.clear();
+        x.clear();
+        y.clear();
+        z.clear();
+        for (std::size_t i = 0; i < searches.size(); ++i) {
+            if (!searches[i].wants_value()) continue;
+            const glm::dvec3 p = searches[i].next_point();
+            active.push_back(i);
+            x.push_back(p.x);
+            y.push_back(p.y);
+            z.push_back(p.z);
+        }
+        if (active.empty()) break;
+        f.resize(active.size());
+        evaluator.values({x, y, z}, f);
+        for (std::size_t k = 0; k < active.size(); ++k) searches[active[k]].feed(f[k]);
+    }
+    // Then what project_to_surface does after its own secant search.
+    for (std::size_t i = 0; i < requests.size(); ++i) {
+        Projector projector(evaluator, requests[i], settings);
+        out[i] = projector.run_after_secant(searches[i]);
+    }
 }
 
 }  // namespace isomesh

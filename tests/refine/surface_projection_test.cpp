@@ -1,6 +1,9 @@
 #include "refine/surface_projection.h"
 
+#include "refine/error_measures.h"
+
 #include <cmath>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -10,10 +13,25 @@
 namespace isomesh {
 namespace {
 
-TEST(ProjectToSurface, newton_lands_on_a_sphere) {
+TEST(ProjectToSurface, secant_along_the_direction_lands_on_a_sphere) {
+    auto field = test::make_quadric_field({1, 1, 1}, 4.0);
+    auto e = field->make_evaluator();
+    const glm::dvec3 start(1.5, 0.3, -0.2);
+    for (double slope : {0.0, 3.0}) {  // unknown, or roughly |grad f|
+        const Projection p = project_to_surface(*e, {start, {1, 0.1, 0}, slope, 1.0, -1});
+        EXPECT_EQ(p.method, ProjectionMethod::Secant);
+        EXPECT_NEAR(glm::length(p.position), 2.0, 1e-9);
+        EXPECT_NEAR(glm::length(glm::cross(p.position - start, glm::dvec3(1, 0.1, 0))), 0.0, 1e-12);
+        EXPECT_NEAR(glm::dot(p.normal, glm::normalize(p.position)), 1.0, 1e-12);
+        EXPECT_NEAR(p.gradient_norm, 4.0, 1e-8);
+        EXPECT_LE(p.evaluations, 8);
+    }
+}
+
+TEST(ProjectToSurface, newton_along_the_gradient_without_direction) {
     auto field = test::make_sphere_field({0, 0, 0}, 2.0);
     auto e = field->make_evaluator();
-    const Projection p = project_to_surface(*e, {{1.5, 0.3, -0.2}, {1, 0, 0}, 1.0, -1});
+    const Projection p = project_to_surface(*e, {{1.5, 0.3, -0.2}, {0, 0, 0}, 0.0, 1.0, -1});
     EXPECT_EQ(p.method, ProjectionMethod::Newton);
     EXPECT_NEAR(glm::length(p.position), 2.0, 1e-9);
     EXPECT_NEAR(glm::dot(p.normal, glm::normalize(p.position)), 1.0, 1e-12);
@@ -22,7 +40,7 @@ TEST(ProjectToSurface, newton_lands_on_a_sphere) {
 TEST(ProjectToSurface, keeps_a_fixed_axis) {
     auto field = test::make_quadric_field({1, 1, 1}, 4.0);
     auto e = field->make_evaluator();
-    const Projection p = project_to_surface(*e, {{1.0, 1.0, 0.5}, {1, 1, 0}, 1.0, 2});
+    const Projection p = project_to_surface(*e, {{1.0, 1.0, 0.5}, {1, 1, 0}, 0.0, 1.0, 2});
     ASSERT_TRUE(p.on_surface());
     EXPECT_EQ(p.position.z, 0.5);
     EXPECT_NEAR(glm::length(p.position), 2.0, 1e-9);
@@ -34,7 +52,7 @@ TEST(ProjectToSurface, brackets_where_newton_fails) {
         {[](const glm::dvec3& p) { return p.x * p.x * p.x - 0.001; },
          [](const glm::dvec3& p) { return glm::dvec3(3 * p.x * p.x, 0, 0); }});
     auto e = field->make_evaluator();
-    const Projection p = project_to_surface(*e, {{0, 0, 0}, {1, 0, 0}, 1.0, -1});
+    const Projection p = project_to_surface(*e, {{0, 0, 0}, {1, 0, 0}, 0.0, 1.0, -1});
     EXPECT_EQ(p.method, ProjectionMethod::Bracketing);
     EXPECT_NEAR(p.position.x, 0.1, 1e-9);
 }
@@ -46,7 +64,7 @@ TEST(ProjectToSurface, never_moves_to_a_pole) {
          [](const glm::dvec3& p) { return glm::dvec3(-1.0 / (p.x * p.x), 0, 0); }});
     auto e = field->make_evaluator();
     const glm::dvec3 start(0.01, 0.2, 0.3);
-    const Projection p = project_to_surface(*e, {start, {1, 0, 0}, 1.0, -1});
+    const Projection p = project_to_surface(*e, {start, {1, 0, 0}, 0.0, 1.0, -1});
     EXPECT_EQ(p.method, ProjectionMethod::Failed);
     EXPECT_EQ(p.position, start);
 }
@@ -54,15 +72,70 @@ TEST(ProjectToSurface, never_moves_to_a_pole) {
 TEST(ProjectToSurface, fails_without_surface_within_reach) {
     auto field = test::make_sphere_field({0, 0, 0}, 10.0);
     auto e = field->make_evaluator();
-    const Projection p = project_to_surface(*e, {{1, 0, 0}, {1, 0, 0}, 1.0, -1});
+    const Projection p = project_to_surface(*e, {{1, 0, 0}, {1, 0, 0}, 0.0, 1.0, -1});
     EXPECT_FALSE(p.on_surface());
     EXPECT_EQ(p.position, glm::dvec3(1, 0, 0));
     // Undefined everywhere: NaN values never count as roots.
     auto nan_field = test::make_analytic_field({[](const glm::dvec3&) { return std::nan(""); },
                                                 [](const glm::dvec3&) { return glm::dvec3(0.0); }});
     auto n = nan_field->make_evaluator();
-    EXPECT_FALSE(project_to_surface(*n, {{1, 0, 0}, {1, 0, 0}, 1.0, -1}).on_surface());
-    EXPECT_FALSE(project_to_surface(*e, {{1, 0, 0}, {1, 0, 0}, 0.0, -1}).on_surface());
+    EXPECT_FALSE(project_to_surface(*n, {{1, 0, 0}, {1, 0, 0}, 0.0, 1.0, -1}).on_surface());
+    EXPECT_FALSE(project_to_surface(*e, {{1, 0, 0}, {1, 0, 0}, 0.0, 0.0, -1}).on_surface());
+}
+
+}  // namespace
+}  // namespace isomesh
+
+namespace isomesh {
+namespace {
+
+// The batched form gives the same projections bit for bit, failures and fallbacks included.
+TEST(ProjectToSurface, batch_matches_one_at_a_time) {
+    auto field = test::compile_field("x^2+y^2+z^2+2cos(2x)=5");
+    auto e = field->make_evaluator();
+    std::vector<ProjectionRequest> requests;
+    for (int i = 0; i < 300; ++i) {
+        const glm::dvec3 start(std::sin(i) * 2.0, std::cos(0.7 * i) * 2.0, std::sin(1.3 * i));
+        const glm::dvec3 direction = i % 5 == 0 ? glm::dvec3(0.0) : start;
+        requests.push_back(
+            {start, direction, i % 3 == 0 ? 0.0 : 3.0, 0.2 + (i % 7) * 0.1, i % 11 == 0 ? 2 : -1});
+    }
+    std::vector<Projection> batch(requests.size());
+    project_to_surface(*e, requests, batch);
+    int methods[4] = {0, 0, 0, 0};
+    for (std::size_t i = 0; i < requests.size(); ++i) {
+        const Projection one = project_to_surface(*e, requests[i]);
+        ASSERT_EQ(one.position, batch[i].position) << i;
+        ASSERT_EQ(one.normal, batch[i].normal) << i;
+        ASSERT_EQ(one.method, batch[i].method) << i;
+        ++methods[int(one.method)];
+    }
+    EXPECT_GT(methods[int(ProjectionMethod::Secant)], 100);
+    EXPECT_GT(methods[int(ProjectionMethod::Newton)], 10);
+    EXPECT_GT(methods[int(ProjectionMethod::Failed)], 0);  // too far from the surface
+}
+
+TEST(ErrorMeasure, batch_matches_one_at_a_time) {
+    auto field = test::compile_field("x^2+y^2+z^2+2cos(2x)=5");
+    auto e = field->make_evaluator();
+    std::vector<TriangleGeometry> triangles;
+    for (int i = 0; i < 100; ++i) {
+        const glm::dvec3 a(std::sin(i), std::cos(i), 1.5), b = a + glm::dvec3(0.3, 0.1, 0),
+                                                           c = a + glm::dvec3(0, 0.2, 0.1);
+        triangles.push_back({a, b, c, 0.5 * (a + b) + glm::dvec3(0, 0, 0.01), i % 4 ? 3.0 : 0.0});
+    }
+    for (const std::string& name : error_measure_names()) {
+        auto measure = make_error_measure(name);
+        ASSERT_TRUE(measure);
+        std::vector<double> errors(triangles.size());
+        measure->triangle_errors(*e, triangles, errors);
+        for (std::size_t i = 0; i < triangles.size(); ++i) {
+            ASSERT_EQ(errors[i], measure->triangle_error(*e, triangles[i])) << name << " " << i;
+            ASSERT_GE(errors[i], 0.0);
+        }
+    }
+    EXPECT_EQ(make_error_measure("no such measure"), nullptr);
+    EXPECT_EQ(error_measure_names().front(), "distance");
 }
 
 }  // namespace
