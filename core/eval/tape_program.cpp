@@ -112,8 +112,8 @@ TapeProgram make_program(std::vector<Instruction> code) {
             if (form == BatchForm::ImmediateA) step.imm = c[ins.a].imm;
             if (form == BatchForm::ImmediateB) step.imm = c[ins.b].imm;
         }
-        // The result gets its register before the operands' are released, so a kernel never
-        // writes the array it reads (the kernels' restrict contract).
+        // The result gets its register before the operands' are released, so a step never
+        // writes an array it reads (run_batch_steps' precondition).
         step.out = i == output ? kOutputRegister : registers.allocate();
         reg[i] = step.out;
         program.steps.push_back(step);
