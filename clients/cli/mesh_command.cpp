@@ -1,4 +1,4 @@
-// `isomesh mesh`: phase 1 polygonization of a function (or a sampled .iso grid) to a PLY or OBJ
+// `isomesh mesh`: phase 1 polygonization of a function (or a sampled .iso grid) to a glTF (.glb), STL, PLY or OBJ
 // file, with optional statistics as one JSON line.
 #include <cctype>
 #include <cmath>
@@ -10,9 +10,10 @@
 #include "commands.h"
 #include "eval/grid_field.h"
 #include "function_input.h"
-#include "mesh/mesh_io.h"
+#include "mesh_export.h"
 #include "output.h"
 #include "polygonize/polygonizer.h"
+#include "refine_options.h"
 
 namespace isomesh::cli {
 
@@ -21,17 +22,21 @@ namespace {
 constexpr std::string_view kUsage =
     R"(usage: isomesh mesh EXPR -o FILE [--param NAME=VALUE]... [--box x0,x1,y0,y1,z0,z1]
                     [--depth MIN,MAX] [--threads N] [--stats]
+                    [--triangles N] [--max-error E] [--error-measure M]
 
 Meshes the surface EXPR = 0 (an equation such as 'x^2+y^2+z^2=1', '@model.vm' for a Fidget
 model, or '@grid.iso' for a sampled grid at isovalue 0) with an octree and Marching Cubes 33,
 every vertex on the surface, and writes it to FILE:
-  -o, --output FILE   .ply (binary little endian, with normals) or .obj
+  -o, --output FILE   .glb (glTF 2.0, Draco-compressed, with normals), .stl (binary),
+                      .ply (binary little endian, with normals) or .obj
   --param a=1.5       the value of parameter a (repeat for each parameter)
   --box ...           the meshing box (default -5,5,-5,5,-5,5; a grid's own box for .iso)
   --depth MIN,MAX     octree depths: every cell down to MIN is examined, cells are split
                       where needed down to MAX (default 4,9; 0 <= MIN <= MAX <= 16)
   --threads N         worker threads (default 0: all cores); the mesh does not depend on it
   --stats             print one JSON line: triangles, vertices, evaluations, time_ms, ...
+                      (with refinement also first_mesh_ms, total_ms, error_total,
+                      error_max, splits, merges)
 )";
 
 constexpr OptionSpec kOptions[] = {{"output", true, false},  {"param", true, true},
@@ -108,30 +113,35 @@ nlohmann::ordered_json stats_json(const PolygonizeStats& stats) {
 
 int run_mesh(std::span<const std::string_view> raw_args) {
     const std::vector<std::string_view> expanded = expand_short_options(raw_args);
-    Arguments args(expanded, kOptions);
+    std::vector<OptionSpec> specs(std::begin(kOptions), std::end(kOptions));
+    specs.insert(specs.end(), std::begin(kRefineOptionSpecs), std::end(kRefineOptionSpecs));
+    Arguments args(expanded, specs);
     if (args.help()) {
         std::fputs(kUsage.data(), stdout);
+        std::fputs(kRefineUsage.data(), stdout);
         return 0;
     }
+    const RefineOptions refine_options = parse_refine_options(args);
     if (args.positional().size() != 1) {
         throw UsageError("expected one EXPR, got " + std::to_string(args.positional().size()));
     }
-    if (!args.has("output")) throw UsageError("missing -o FILE (.ply or .obj)");
+    if (!args.has("output")) throw UsageError("missing -o FILE (.glb, .stl, .ply or .obj)");
     PolygonizeSettings settings;
     if (args.has("depth")) {
         const std::vector<double> d = parse_numbers(*args.value("depth"), 2, "--depth");
         settings.min_depth = parse_whole(d[0], "--depth MIN", 0, 16);
         settings.max_depth = parse_whole(d[1], "--depth MAX", 0, 16);
         if (settings.min_depth > settings.max_depth) throw UsageError("--depth: MIN exceeds MAX");
+    } else if (refine_options.refine()) {
+        settings.min_depth = kRefineMinDepth;
     }
     if (args.has("threads")) {
         settings.threads =
             parse_whole(parse_number(*args.value("threads"), "--threads"), "--threads", 0, 256);
     }
     const std::string output(*args.value("output"));
-    if (!output.ends_with(".ply") && !output.ends_with(".PLY") && !output.ends_with(".obj") &&
-        !output.ends_with(".OBJ")) {
-        throw UsageError("-o: the file name must end in .ply or .obj");
+    if (!is_export_file_name(output)) {
+        throw UsageError("-o: the file name must end in .glb, .stl, .ply or .obj");
     }
     const std::string_view source = args.positional()[0];
     const std::shared_ptr<const Field> field = load_field(source, args.values("param"));
@@ -143,13 +153,19 @@ int run_mesh(std::span<const std::string_view> raw_args) {
     }
 
     const PolygonizeResult result = polygonize(*field, settings);
+    std::optional<RefineOutcome> refined;
+    if (refine_options.refine()) refined = refine_first_mesh(field, result.mesh, refine_options);
     try {
-        write_mesh_file(result.mesh, output);
+        write_export_file(refined ? refined->mesh : result.mesh, output);
     } catch (const std::runtime_error& error) {
         print_error(error.what());
         return 1;
     }
-    if (args.has("stats")) print_json_line(stats_json(result.stats));
+    if (args.has("stats")) {
+        nlohmann::ordered_json stats = stats_json(result.stats);
+        if (refined) add_refine_stats(stats, result.stats.time_ms, *refined);
+        print_json_line(stats);
+    }
     return 0;
 }
 
