@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs what isomesh needs, builds everything, and runs every test: the unit and integration
-# suites (ctest), then the fuzz targets for a fixed time each. Exits non-zero on any failure.
+# suites (ctest), then the fuzz targets for a fixed time each, then the JavaScript client's unit
+# tests and the browser test of the viewer (Debian's chromium, playwright-core; screenshots in
+# build/test-artifacts/web). Exits non-zero on any failure.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
@@ -9,3 +11,8 @@ ctest --test-dir build --output-on-failure -j "$(nproc)" --timeout 600
 # The protocol's Node check: draco3d decodes frames and Ajv validates messages made by the C++ side.
 (cd tests/protocol/node && npm ci --no-audit --no-fund && node --test)
 bash scripts/fuzz.sh
+# The client library (clients/js: varints, frames, slot table, sessions, frames of the C++
+# encoder) and the viewer's pure modules (clients/web/test).
+node --test clients/js/test/ clients/web/test/
+# The viewer in Debian's chromium, served by a real isomesh-server on a free loopback port.
+node --test tests/web/

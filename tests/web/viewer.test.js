@@ -129,7 +129,8 @@ test('moving the slider changes the mesh', async () => {
   const s = await waitForSnapshot(convergedOn, { expression: 'x^2+y^2+z^2=a', parameters: { a: 4 } });
   assert.ok(s.version > sphere.snapshot.version, 'a new function version');
   const signature = await page.evaluate(() => window.isomesh.meshSignature());
-  assert.notDeepEqual(signature, sphere.signature, 'the mesh data changed');
+  const journal = await page.evaluate(() => window.isomesh.journal());
+  assert.notDeepEqual(signature, sphere.signature, `the mesh data changed: ${JSON.stringify({ before: sphere.signature, after: signature, journal })}`);
   const png = await canvasShot('2-sphere-a4');
   const pixels = coloredFraction(png);
   assert.ok(

@@ -87,9 +87,7 @@ export class IsomeshClient extends Emitter {
   async create(options) {
     const fields = functionFields(options);
     const startedAt = now();
-    const reply = await this.request('create', fields);
-    const session = this.#adopt(reply, startedAt);
-    return session;
+    return this.request('create', fields, (reply) => this.#adopt(reply, startedAt));
   }
 
   /** Subscribes to an existing session (by its hex id); a keyframe follows the reply. */
@@ -97,8 +95,7 @@ export class IsomeshClient extends Emitter {
     const known = this.sessions.get(sessionId);
     if (known) return known;
     const startedAt = now();
-    const reply = await this.request('subscribe', { session: sessionId });
-    return this.#adopt(reply, startedAt);
+    return this.request('subscribe', { session: sessionId }, (reply) => this.#adopt(reply, startedAt));
   }
 
   /** Round trip: resolves with {rttMs, serverTimeUs}. */
@@ -111,8 +108,11 @@ export class IsomeshClient extends Emitter {
   /**
    * Sends a request and resolves with its reply (rejects with an IsomeshError on an `error`
    * reply, a timeout or a closed connection). The building block of every method here.
+   * `onReply(reply)`, if given, runs as soon as the reply is read, before any later message or
+   * frame is handled (a session must exist before its keyframe arrives), and its result is what
+   * the promise resolves with.
    */
-  request(type, fields = {}) {
+  request(type, fields = {}, onReply = (reply) => reply) {
     if (this.closed) return Promise.reject(new IsomeshError('closed', 'the connection is closed'));
     const id = this.nextRequestId++;
     const text = requestText(type, id, fields);
@@ -122,7 +122,7 @@ export class IsomeshClient extends Emitter {
         reject(new IsomeshError('timeout', `no reply to ${type} within ${this.options.requestTimeoutMs} ms`));
       }, this.options.requestTimeoutMs);
       timer.unref?.(); // Node: a pending request alone does not keep the process alive
-      this.pending.set(id, { resolve, reject, timer });
+      this.pending.set(id, { resolve, reject, timer, onReply });
       this.socket.send(text);
     });
   }
@@ -167,11 +167,18 @@ export class IsomeshClient extends Emitter {
     }
     this.emit('message', message);
     if (REPLY_TYPES.has(message.type) && message.id !== undefined && this.pending.has(message.id)) {
-      const { resolve, reject, timer } = this.pending.get(message.id);
+      const { resolve, reject, timer, onReply } = this.pending.get(message.id);
       this.pending.delete(message.id);
       clearTimeout(timer);
-      if (message.type === 'error') reject(errorFromReply(message));
-      else resolve(message);
+      if (message.type === 'error') {
+        reject(errorFromReply(message));
+        return;
+      }
+      try {
+        resolve(onReply(message));
+      } catch (error) {
+        reject(error);
+      }
       return;
     }
     const session = message.session !== undefined ? this.sessions.get(message.session) : undefined;
@@ -270,12 +277,19 @@ export class Session extends Emitter {
     const fields = functionFields(options);
     const startedAt = now();
     ++this.pendingUpdates;
+    let answered = false;
+    const settle = () => {
+      if (!answered) --this.pendingUpdates;
+      answered = true;
+    };
     try {
-      const reply = await this.client.request('update', { session: this.id, ...fields });
-      this._setState(sessionState(reply), startedAt);
-      return this.state;
+      return await this.client.request('update', { session: this.id, ...fields }, (reply) => {
+        settle(); // before the frames of the new version are handled
+        this._setState(sessionState(reply), startedAt);
+        return this.state;
+      });
     } finally {
-      --this.pendingUpdates;
+      settle();
     }
   }
 

@@ -71,6 +71,15 @@ test('create sends a versioned request and resolves with the session on its repl
   assert.equal(client.sessions.get(SESSION), session);
 });
 
+test('a keyframe read in the same turn as its created reply is not lost', async () => {
+  const { client, socket } = await connected();
+  const pending = client.create({ expression: 'x^2+y^2+z^2=a', parameters: { a: 1 }, box: state.box });
+  socket.reply({ type: 'created', id: socket.lastSent().id, session: SESSION, ...state });
+  socket.frame({ kind: 'keyframe', sequence: 0, triangleIds: [1, 2], mesh: square }); // no await between
+  const session = await pending;
+  assert.equal(session.mesh.triangleCount, 2);
+});
+
 test('frames reach their session: keyframe and delta events, first mesh time, converged', async () => {
   const { client, socket } = await connected();
   const session = await created(client, socket);

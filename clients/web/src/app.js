@@ -33,6 +33,8 @@ export class App {
     this.paused = false;
     this.reconnects = 0;
     this.framedBox = null;
+    /** The last 200 session events, for diagnostics (window.isomesh.journal). */
+    this.journal = [];
   }
 
   async start() {
@@ -122,15 +124,32 @@ export class App {
   }
 
   #watch(session) {
-    session.on('state', () => this.#refreshStatus());
-    session.on('keyframe', () => this.#meshChanged());
-    session.on('delta', () => this.#meshChanged());
+    const note = (entry) => {
+      this.journal.push(entry);
+      if (this.journal.length > 200) this.journal.shift();
+    };
+    const noteFrame = ({ header: h, removed, triangleIds }) =>
+      note(`${h.kind} s${h.sequence} v${h.functionVersion} -${removed.length} +${triangleIds.length}${h.converged ? ' converged' : ''}`);
+    session.on('state', (state) => {
+      note(`state v${state.version} ${JSON.stringify(state.parameters)}`);
+      this.#refreshStatus();
+    });
+    session.on('keyframe', (frame) => {
+      noteFrame(frame);
+      this.#meshChanged();
+    });
+    session.on('delta', (frame) => {
+      noteFrame(frame);
+      this.#meshChanged();
+    });
+    session.on('resync', ({ reason }) => note(`resync (${reason})`));
     session.on('firstMesh', () => this.#refreshStatus());
     session.on('progress', (m) => {
       if (m.version === session.state?.version) this.errorMax = m.error_max;
       this.#refreshStatus();
     });
     session.on('converged', (m) => {
+      note(`converged v${m.version} s${m.sequence}`);
       if (m.version === session.state?.version) this.errorMax = m.error_max;
       this.#refreshStatus();
     });
@@ -179,6 +198,7 @@ export class App {
       this.inFlight = false;
     }
     this.#pump();
+    this.#refreshStatus();
   }
 
   #applyState(state) {

@@ -87,6 +87,7 @@ async function main() {
     },
     snapshot: () => app.snapshot(),
     meshSignature,
+    journal: () => [...app.journal],
     renderedFrames: () => viewer.frames,
     app,
     viewer,
