@@ -34,6 +34,7 @@
 #include <stdexcept>
 #include <string>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 #include "mesh/topology.h"
@@ -146,10 +147,14 @@ glm::dvec3 unit_or_zero(const glm::dvec3& v) {
     return length > 0.0 && std::isfinite(length) ? v / length : glm::dvec3(0.0);
 }
 
-/// The axis on which two points of a boundary edge agree (the face of the box they lie on).
-std::int8_t shared_axis(const glm::dvec3& a, const glm::dvec3& b) {
+/// The axis of the face of the meshing box that a boundary edge a-b lies on, or -1: phase 1 puts
+/// such edges exactly on the box, which the mesh's bounding box `bounds` touches. (A plane such
+/// as x = 0 has every vertex at x = 0: that axis, flat in `bounds`, is not a face.)
+std::int8_t face_axis(const glm::dvec3& a, const glm::dvec3& b, const Box& bounds) {
     for (int k = 0; k < 3; ++k)
-        if (a[k] == b[k]) return static_cast<std::int8_t>(k);
+        if (a[k] == b[k] && bounds.lo[k] < bounds.hi[k] &&
+            (a[k] == bounds.lo[k] || a[k] == bounds.hi[k]))
+            return static_cast<std::int8_t>(k);
     return -1;
 }
 
@@ -220,6 +225,9 @@ class Refiner::Impl {
     const Constraint& constraint() const { return constraint_; }
     std::uint64_t version() const { return version_; }
     MeshStats stats() const;
+    QueueEnds queue_ends() const {
+        return {split_queue_->extreme_priority(), merge_queue_->extreme_priority()};
+    }
     const RefineCounters& counters() const { return counters_; }
     RefinedMesh mesh() const;
     MeshDelta snapshot() const;
@@ -237,6 +245,14 @@ class Refiner::Impl {
     double base_length(std::uint32_t t) const {
         const Triangle& T = triangles_[t];
         return glm::length(position(t, T.base + 1) - position(t, T.base));
+    }
+    /// Splittable: every edge at least min_edge_length. Splitting a triangle with a shorter edge
+    /// (coincident vertices in the input) would only make more degenerate triangles.
+    bool splittable(std::uint32_t t) const {
+        for (int e = 0; e < 3; ++e)
+            if (!(glm::length(position(t, e + 1) - position(t, e)) >= settings_.min_edge_length))
+                return false;
+        return true;
     }
     bool is_diamond(std::uint32_t t, std::uint32_t n) const {
         return n != kNone && triangles_[n].nb[triangles_[n].base] == t;
@@ -268,11 +284,11 @@ class Refiner::Impl {
     void merge(std::uint32_t record);
     MeshStats stats_after_merge(const MeshStats& stats, std::uint32_t record);
     bool acceptable_split(const MeshStats& stats, const SplitPlan& plan) const;
-    bool find_split(const MeshStats& stats, SplitPlan& plan, double min_priority,
-                    std::uint32_t avoid_record);
+    bool find_split(const MeshStats& stats, SplitPlan& plan);
     bool conflicts(const SplitPlan& plan, std::uint32_t record) const;
     std::size_t act();  // one split, merge or exchange; returns operations done, 0 when idle
-    std::size_t try_exchange(const MeshStats& stats, std::uint32_t record);
+    std::size_t try_exchange(const MeshStats& stats);
+    bool choose_merges(const MeshStats& stats, const SplitPlan& plan, double below);
 
     // --- function versions
     bool refresh_pending() const;
@@ -298,6 +314,7 @@ class Refiner::Impl {
     std::size_t leaf_count_ = 0;
     CompensatedSum total_error_;
     double root_edge_length_ = 0.0;  // mean edge length of the phase-1 mesh
+    Box bounds_;                     // bounding box of the phase-1 mesh
     bool has_boundary_ = false;      // some edge has one triangle (then splits may add 1)
 
     std::uint32_t next_vertex_id_ = 0;
@@ -305,6 +322,7 @@ class Refiner::Impl {
     DeltaBuilder delta_;
     RefineCounters counters_;
     SplitPlan plan_;  // scratch
+    std::vector<std::uint32_t> exchange_merges_;
     std::vector<std::uint32_t> stale_, pending_;
     std::vector<ProjectionRequest> requests_;
     std::vector<Projection> projections_;
@@ -332,6 +350,13 @@ void Refiner::Impl::load(const Mesh& input) {
     std::vector<std::uint32_t> slot_of(mesh.positions.size(), kNone);
     for (const auto& tri : mesh.triangles)
         for (std::uint32_t v : tri) slot_of[v] = 0;  // mark used vertices
+    bounds_ = {glm::dvec3(std::numeric_limits<double>::infinity()),
+               glm::dvec3(-std::numeric_limits<double>::infinity())};
+    for (std::uint32_t v = 0; v < mesh.positions.size(); ++v) {
+        if (slot_of[v] == kNone) continue;
+        bounds_.lo = glm::min(bounds_.lo, mesh.positions[v]);
+        bounds_.hi = glm::max(bounds_.hi, mesh.positions[v]);
+    }
     for (std::uint32_t v = 0; v < mesh.positions.size(); ++v) {
         if (slot_of[v] == kNone) continue;
         const std::uint32_t slot = vertices_.allocate();
@@ -370,7 +395,7 @@ void Refiner::Impl::load(const Mesh& input) {
             b.scale = std::min(b.scale, length);
             if (T.nb[e] == kNone) {
                 has_boundary_ = true;
-                const std::int8_t axis = shared_axis(a.position, b.position);
+                const std::int8_t axis = face_axis(a.position, b.position, bounds_);
                 if (a.fixed_axis < 0) a.fixed_axis = axis;
                 if (b.fixed_axis < 0) b.fixed_axis = axis;
             }
@@ -431,7 +456,7 @@ ProjectionRequest Refiner::Impl::candidate_request(std::uint32_t t) const {
     request.direction = a.normal + b.normal;
     request.slope = 0.5 * (a.gradient_norm + b.gradient_norm);
     request.scale = glm::length(b.position - a.position);
-    request.fixed_axis = T.nb[T.base] == kNone ? shared_axis(a.position, b.position) : -1;
+    request.fixed_axis = T.nb[T.base] == kNone ? face_axis(a.position, b.position, bounds_) : -1;
     if (!(request.scale > 0.0)) request.scale = settings_.min_edge_length;
     return request;
 }
@@ -514,8 +539,7 @@ void Refiner::Impl::add_leaf(std::uint32_t t) {
     assert(T.error_version == version_);
     const double error = T.error;
     total_error_.add(error);
-    PriorityQueue& queue =
-        base_length(t) < settings_.min_edge_length ? *blocked_queue_ : *split_queue_;
+    PriorityQueue& queue = splittable(t) ? *split_queue_ : *blocked_queue_;
     queue.insert(t, error);
     delta_.add_triangle(delta_triangle(t));
 }
@@ -566,10 +590,11 @@ bool Refiner::Impl::plan_split(std::uint32_t t, SplitPlan& plan) {
     plan.chain.clear();
     plan.added_triangles = 0;
     for (std::uint32_t current = t;;) {
-        if (base_length(current) < settings_.min_edge_length) return false;
+        if (!splittable(current)) return false;
         plan.chain.push_back(current);
         const std::uint32_t n = triangles_[current].nb[triangles_[current].base];
         if (n == kNone || is_diamond(current, n)) {
+            if (n != kNone && !splittable(n)) return false;
             plan.partner = n;
             plan.added_triangles += n == kNone ? 1 : 2;
             return true;
@@ -761,8 +786,7 @@ bool Refiner::Impl::conflicts(const SplitPlan& plan, std::uint32_t record) const
     return is_child(plan.partner) || std::any_of(plan.chain.begin(), plan.chain.end(), is_child);
 }
 
-bool Refiner::Impl::find_split(const MeshStats& stats, SplitPlan& plan, double min_priority,
-                               std::uint32_t avoid_record) {
+bool Refiner::Impl::find_split(const MeshStats& stats, SplitPlan& plan) {
     // Quick refusals before scanning the queue: a split adds at least 1 triangle, and at least 2
     // on a closed mesh.
     SplitPlan smallest;
@@ -770,34 +794,64 @@ bool Refiner::Impl::find_split(const MeshStats& stats, SplitPlan& plan, double m
     if (!acceptable_split(stats, smallest)) return false;
     // The common case: the top of the queue fits.
     const std::uint32_t top = split_queue_->top();
-    if (top == kNone || !(split_queue_->priority(top) > min_priority)) return false;
-    if (plan_split(top, plan) && !conflicts(plan, avoid_record) && acceptable_split(stats, plan))
-        return true;
+    if (top == kNone) return false;
+    if (plan_split(top, plan) && acceptable_split(stats, plan)) return true;
     bool found = false;
     split_queue_->visit_in_order([&](std::uint32_t t) {
-        if (!(split_queue_->priority(t) > min_priority)) return true;  // nothing better follows
-        if (!plan_split(t, plan) || conflicts(plan, avoid_record)) return false;
-        found = acceptable_split(stats, plan);
+        found = plan_split(t, plan) && acceptable_split(stats, plan);
         return found;
     });
     return found;
 }
 
-std::size_t Refiner::Impl::try_exchange(const MeshStats& stats, std::uint32_t record) {
-    // ROAM's optimisation at a fixed budget: undo the cheapest split and make the best one when
-    // the best is worth swap_ratio times more.
-    const double merge_cost = merge_queue_->priority(record);
-    const MeshStats after_merge = stats_after_merge(stats, record);
-    if (!find_split(after_merge, plan_, settings_.swap_ratio * merge_cost, record)) return 0;
-    merge(record);
+bool Refiner::Impl::choose_merges(const MeshStats& stats, const SplitPlan& plan, double below) {
+    // The cheapest merges (each worth less than `below`) that make room for the split.
+    constexpr std::size_t kMaxMerges = 8;
+    exchange_merges_.clear();
+    MeshStats after = stats;
+    bool enough = false;
+    int skipped = 0;
+    merge_queue_->visit_in_order([&](std::uint32_t record) {
+        if (exchange_merges_.size() == kMaxMerges) return true;
+        // Bucket order is approximate: look a little past a record that is too dear.
+        if (!(merge_queue_->priority(record) < below)) return ++skipped > int(kMaxMerges);
+        if (conflicts(plan, record)) return false;
+        after = stats_after_merge(after, record);
+        exchange_merges_.push_back(record);
+        enough = acceptable_split(after, plan);
+        return enough;
+    });
+    return enough;
+}
+
+std::size_t Refiner::Impl::try_exchange(const MeshStats& stats) {
+    // ROAM's optimisation at a fixed budget: undo the cheapest splits to make room for a better
+    // one, when it is worth swap_ratio times more than each split undone. The best few splits are
+    // tried, as a long forced chain may need more room than the cheap merges give.
+    const std::uint32_t cheapest = merge_queue_->top();
+    if (cheapest == kNone) return 0;
+    const double threshold = settings_.swap_ratio * merge_queue_->priority(cheapest);
+    constexpr int kCandidates = 16;
+    int examined = 0;
+    bool found = false;
+    split_queue_->visit_in_order([&](std::uint32_t t) {
+        if (++examined > kCandidates) return true;
+        const double priority = split_queue_->priority(t);
+        if (!(priority > threshold)) return false;  // bucket order is approximate: look further
+        found =
+            plan_split(t, plan_) && choose_merges(stats, plan_, priority / settings_.swap_ratio);
+        return found;
+    });
+    if (!found) return 0;
+    for (std::uint32_t record : exchange_merges_) merge(record);
     execute(plan_);
     ++counters_.swaps;
-    return 1 + plan_.bisections();
+    return exchange_merges_.size() + plan_.bisections();
 }
 
 std::size_t Refiner::Impl::act() {
     const MeshStats current = stats();
-    if (constraint_.wants_refinement(current) && find_split(current, plan_, -1.0, kNone)) {
+    if (constraint_.wants_refinement(current) && find_split(current, plan_)) {
         execute(plan_);
         return plan_.bisections();
     }
@@ -808,7 +862,7 @@ std::size_t Refiner::Impl::act() {
         merge(record);
         return 1;
     }
-    return try_exchange(current, record);
+    return try_exchange(current);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1100,6 +1154,9 @@ std::uint64_t Refiner::version() const {
 }
 MeshStats Refiner::stats() const {
     return impl_->stats();
+}
+QueueEnds Refiner::queue_ends() const {
+    return impl_->queue_ends();
 }
 const RefineCounters& Refiner::counters() const {
     return impl_->counters();

@@ -55,8 +55,8 @@ struct RefineSettings {
     ProjectionSettings projection;
     /// A split and a merge are exchanged when the split's priority exceeds the merge's by this
     /// factor (> 1; hysteresis against exchanging back and forth).
-    double swap_ratio = 2.0;
-    /// Triangles whose base edge is shorter than this are never split.
+    double swap_ratio = 1.1;
+    /// Triangles with an edge shorter than this are never split (nor forced to split).
     double min_edge_length = 1e-7;
     /// A bound on forced splits per split (never reached on meshes whose base edges are longest
     /// edges; a guard against malformed input).
@@ -101,6 +101,15 @@ struct RefineCounters {
     std::size_t refused_splits = 0;  // chains longer than max_forced_chain
 };
 
+/// The ends of the two queues: the largest split priority (splittable leaves) and the smallest
+/// merge priority (0 when a queue is empty). Converged under a triangle budget, the refiner leaves
+/// no split that fits worth more than swap_ratio times the cheapest merge (ROAM's optimality, up to
+/// the hysteresis).
+struct QueueEnds {
+    double largest_split = 0.0;
+    double smallest_merge = 0.0;
+};
+
 /// The current mesh in compact form, triangles and vertices sorted by id.
 struct RefinedMesh {
     Mesh mesh;  // with neighbours and base_edge
@@ -142,6 +151,7 @@ class Refiner {
     std::uint64_t version() const;
 
     MeshStats stats() const;
+    QueueEnds queue_ends() const;
     const RefineCounters& counters() const;
     RefinedMesh mesh() const;
     /// The delta that builds the current mesh from nothing.

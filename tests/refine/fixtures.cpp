@@ -155,14 +155,14 @@ Mesh half_cube_sphere_mesh(const Field& field, int n) {
     return cube_mesh(field, n, true);
 }
 
-std::string check_conforming(const Mesh& mesh, bool expect_watertight) {
+std::string check_conforming(const Mesh& mesh, Boundary boundary) {
     const TopologyReport report = analyze_topology(mesh);
     if (report.nonmanifold_edges)
         return "non-manifold edges: " + std::to_string(report.nonmanifold_edges);
     if (report.nonmanifold_vertices)
         return "non-manifold vertices: " + std::to_string(report.nonmanifold_vertices);
     if (report.inconsistently_oriented_edges) return "inconsistent orientation";
-    if (expect_watertight && report.boundary_edges)
+    if (boundary == Boundary::None && report.boundary_edges)
         return "boundary edges (cracks or T-junctions): " + std::to_string(report.boundary_edges);
     if (mesh.neighbours.size() != mesh.triangles.size()) return "neighbours missing";
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
@@ -170,6 +170,7 @@ std::string check_conforming(const Mesh& mesh, bool expect_watertight) {
             const std::uint32_t a = mesh.triangles[t][e], b = mesh.triangles[t][(e + 1) % 3];
             const std::uint32_t u = mesh.neighbours[t][e];
             if (u == kNoNeighbour) {
+                if (boundary != Boundary::OnBoxFaces) continue;
                 // A boundary edge must lie on a face of the box (an exactly shared coordinate);
                 // anything else is a crack.
                 const glm::dvec3 &pa = mesh.positions[a], &pb = mesh.positions[b];
@@ -185,6 +186,27 @@ std::string check_conforming(const Mesh& mesh, bool expect_watertight) {
         }
     }
     return {};
+}
+
+std::size_t boundary_loops(const Mesh& mesh) {
+    // Union-find over the vertices of boundary edges: each loop is one set.
+    std::map<std::uint32_t, std::uint32_t> parent;
+    auto find = [&](std::uint32_t v) {
+        while (parent[v] != v) v = parent[v] = parent[parent[v]];
+        return v;
+    };
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        for (int e = 0; e < 3; ++e) {
+            if (mesh.neighbours[t][e] != kNoNeighbour) continue;
+            const std::uint32_t a = mesh.triangles[t][e], b = mesh.triangles[t][(e + 1) % 3];
+            parent.try_emplace(a, a);
+            parent.try_emplace(b, b);
+            parent[find(a)] = find(b);
+        }
+    }
+    std::size_t loops = 0;
+    for (const auto& [v, p] : parent) loops += find(v) == v ? 1 : 0;
+    return loops;
 }
 
 bool same_mesh(const Mesh& a, const Mesh& b) {

@@ -38,9 +38,20 @@ Mesh cube_sphere_mesh(const Field& field, int n);
 /// vertices lie exactly on z = 0, as phase 1 leaves them on a face of its box.
 Mesh half_cube_sphere_mesh(const Field& field, int n);
 
+/// Where a mesh may have boundary edges (edges of one triangle).
+enum class Boundary {
+    None,        // watertight
+    OnBoxFaces,  // only on faces of the meshing box (both ends share an exact coordinate)
+    Anywhere,    // not checked here (compare boundary_loops with the starting mesh instead)
+};
+
 /// Empty when `mesh` is a conforming, consistently oriented manifold with symmetric neighbours
-/// and `expect_watertight` holds (no boundary edges), else a description of the first problem.
-std::string check_conforming(const Mesh& mesh, bool expect_watertight = true);
+/// whose boundary edges are where `boundary` allows, else a description of the first problem.
+std::string check_conforming(const Mesh& mesh, Boundary boundary = Boundary::None);
+
+/// The number of closed loops formed by the boundary edges. A crack or a T-junction made by
+/// refinement would add one.
+std::size_t boundary_loops(const Mesh& mesh);
 
 /// Vertex positions and triangles of two meshes equal exactly (same order).
 bool same_mesh(const Mesh& a, const Mesh& b);

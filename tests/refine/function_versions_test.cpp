@@ -6,6 +6,7 @@
 
 #include "fixtures.h"
 #include "mesh/topology.h"
+#include "polygonize/polygonizer.h"
 #include "refine/refiner.h"
 
 namespace isomesh {
@@ -169,6 +170,50 @@ TEST(RefinerVersions, without_phase_one_vertices_only_move) {
     EXPECT_GT(refiner.counters().failed_refreshes, 0u);
     EXPECT_EQ(refiner.counters().restarts, 0u);
     EXPECT_EQ(test::check_conforming(refiner.mesh().mesh), "");
+}
+
+}  // namespace
+}  // namespace isomesh
+
+namespace isomesh {
+namespace {
+
+// A bump travelling over a sphere: detail has to move with it. Split and merge exchanges (ROAM's
+// dual queues) keep the mesh optimal at its budget: no split that fits is worth more than
+// swap_ratio times the cheapest merge, and the error ends close to a fresh mesh's.
+TEST(RefinerVersions, exchanges_follow_a_moving_bump) {
+    const std::string expression = "x^2+y^2+z^2-4-3exp(-8((x-a)^2+y^2+(z-1)^2))=0";
+    RefineSettings settings;
+    settings.constraint = Constraint::triangle_budget(6000);
+    settings.phase1 = [](const Field& f) {
+        PolygonizeSettings p;
+        p.min_depth = 3;
+        p.threads = 1;
+        return polygonize(f, p).mesh;
+    };
+    Refiner refiner(test::compile_field(expression, {{"a", 1.5}}), settings);
+    refiner.run_to_convergence();
+    for (double a : {1.0, 0.5, 0.0, -0.5, -1.0, -1.5}) {
+        refiner.set_field(test::compile_field(expression, {{"a", a}}));
+        const StepResult r = refiner.run_to_convergence();
+        EXPECT_FALSE(r.restarted);
+        const QueueEnds ends = refiner.queue_ends();
+        EXPECT_LE(ends.largest_split, settings.swap_ratio * ends.smallest_merge * (1 + 1e-12))
+            << "a = " << a;
+        EXPECT_GE(refiner.stats().triangles + 1, 6000u);
+    }
+    EXPECT_GT(refiner.counters().swaps, 20u);
+    EXPECT_GT(refiner.counters().merges, refiner.counters().swaps);
+
+    const auto last = test::compile_field(expression, {{"a", -1.5}});
+    Refiner fresh(last, settings);
+    fresh.run_to_convergence();
+    EXPECT_NEAR(refiner.stats().max_error, fresh.stats().max_error, 0.15 * fresh.stats().max_error);
+    auto e = last->make_evaluator();
+    const MeshErrorReport moved = measure_mesh_error(refiner.mesh().mesh, *e);
+    const MeshErrorReport reference = measure_mesh_error(fresh.mesh().mesh, *e);
+    EXPECT_LT(moved.max_distance, 1.15 * reference.max_distance);
+    EXPECT_LT(moved.epsilon4_total, 1.05 * reference.epsilon4_total);
 }
 
 }  // namespace

@@ -27,12 +27,13 @@ RefineSettings budget_settings(std::size_t triangles) {
 }
 
 // Steps with `ops` operations until converged, checking the mesh after every step.
-std::vector<MeshDelta> run_checked(Refiner& refiner, std::size_t ops, bool watertight = true) {
+std::vector<MeshDelta> run_checked(Refiner& refiner, std::size_t ops,
+                                   test::Boundary boundary = test::Boundary::None) {
     std::vector<MeshDelta> deltas;
     for (int guard = 0; guard < 100000; ++guard) {
         StepResult r = refiner.step({ops, 0});
         deltas.push_back(std::move(r.delta));
-        const std::string problem = check_conforming(refiner.mesh().mesh, watertight);
+        const std::string problem = check_conforming(refiner.mesh().mesh, boundary);
         EXPECT_EQ(problem, "") << "after step " << guard;
         if (!problem.empty() || r.converged) break;
     }
@@ -62,9 +63,9 @@ TEST(Refiner, splits_keep_a_closed_mesh_conforming_after_every_step) {
 TEST(Refiner, boundary_edges_split_alone_and_stay_on_the_box_face) {
     auto field = test::make_quadric_field({1, 2, 3}, 4);
     const Mesh first = test::half_cube_sphere_mesh(*field, 4);
-    ASSERT_EQ(check_conforming(first, false), "");
+    ASSERT_EQ(check_conforming(first, test::Boundary::OnBoxFaces), "");
     Refiner refiner(field, first, budget_settings(1501));
-    run_checked(refiner, 50, false);
+    run_checked(refiner, 50, test::Boundary::OnBoxFaces);
     const RefinedMesh m = refiner.mesh();
     EXPECT_GE(m.mesh.triangles.size(), 1500u);  // odd counts are reachable with boundary splits
     EXPECT_LE(m.mesh.triangles.size(), 1501u);
