@@ -1,5 +1,5 @@
-// `isomesh mesh`: phase 1 polygonization of a function (or a sampled .iso grid) to a glTF (.glb), STL, PLY or OBJ
-// file, with optional statistics as one JSON line.
+// `isomesh mesh`: phase 1 polygonization of a function (or a sampled .iso grid) to a glTF (.glb),
+// STL, PLY or OBJ file, with optional statistics as one JSON line.
 #include <cctype>
 #include <cmath>
 #include <cstdio>
