@@ -1,0 +1,194 @@
+// Splits and merges on the forest of triangles (ROAM, Duchaineau et al. 1997: forced splits and
+// diamond merges; newest vertex bisection, Mitchell 1989). A split bisects the base edge of a
+// triangle and of its base neighbour (a diamond), after the forced splits that make the
+// neighbour's base edge the same; a merge undoes one such bisection once its children are leaves.
+#include <cassert>
+
+#include "refine/refiner_impl.h"
+
+namespace isomesh {
+
+using namespace refiner_detail;
+
+// ---------------------------------------------------------------------------------------------
+// Splits
+
+bool Refiner::Impl::plan_split(std::uint32_t t, SplitPlan& plan) {
+    plan.chain.clear();
+    plan.added_triangles = 0;
+    for (std::uint32_t current = t;;) {
+        if (!splittable(current)) return false;
+        plan.chain.push_back(current);
+        const std::uint32_t n = triangles_[current].nb[triangles_[current].base];
+        if (n == kNone || is_diamond(current, n)) {
+            if (n != kNone && !splittable(n)) return false;
+            plan.partner = n;
+            plan.added_triangles += n == kNone ? 1 : 2;
+            return true;
+        }
+        plan.added_triangles += 2;
+        if (plan.chain.size() > settings_.max_forced_chain) {
+            ++counters_.refused_splits;
+            return false;
+        }
+        current = n;
+    }
+}
+
+void Refiner::Impl::execute(const SplitPlan& plan) {
+    // Bisect from the far end of the chain back to the triangle that asked: after chain[i + 1] is
+    // bisected, its child across chain[i]'s base edge has that edge as its own base edge.
+    bisect(plan.chain.back(), plan.partner);
+    for (std::size_t i = plan.chain.size() - 1; i-- > 0;) {
+        const std::uint32_t t = plan.chain[i];
+        const std::uint32_t n = triangles_[t].nb[triangles_[t].base];
+        assert(is_diamond(t, n));
+        bisect(t, n);
+    }
+}
+
+std::uint32_t Refiner::Impl::make_child(std::uint32_t record, std::array<std::uint32_t, 3> v,
+                                        std::array<std::uint32_t, 3> nb, std::uint8_t base) {
+    const std::uint32_t slot = triangles_.allocate();
+    Triangle& C = triangles_[slot];
+    C.id = next_triangle_id_++;
+    C.v = v;
+    C.nb = nb;
+    C.base = base;
+    C.parent = record;
+    return slot;
+}
+
+void Refiner::Impl::bisect(std::uint32_t t, std::uint32_t n) {
+    const std::array<std::uint32_t, 2> pair{t, n};
+    ensure_errors({pair.data(), n == kNone ? 1u : 2u});
+    ensure_candidates({&t, 1});
+    const std::uint32_t record = records_.allocate();
+    const std::uint32_t m = vertices_.allocate();
+    {
+        const Triangle& T = triangles_[t];
+        Vertex& M = vertices_[m];
+        M.id = next_vertex_id_++;
+        M.position = T.candidate;
+        M.normal = T.candidate_normal;
+        M.gradient_norm = T.candidate_gradient_norm;
+        M.on_surface = T.candidate_on_surface;
+        M.scale = base_length(t);
+        M.version = version_;
+        M.fixed_axis = n == kNone ? vertices_[T.v[T.base]].fixed_axis : -1;
+        M.alive = true;
+        if (!M.on_surface) ++counters_.failed_projections;
+        delta_.add_vertex(delta_vertex(m));
+    }
+    remove_leaf(t);
+    if (n != kNone) remove_leaf(n);
+
+    // T = (a, b, c) with base a-b becomes (a, m, c) and (m, b, c); N = (b, a, d) becomes
+    // (b, m, d) and (m, a, d). Neighbour slots across the half-base edges are filled below.
+    const std::array<std::uint32_t, 2> parents{t, n};
+    std::array<std::uint32_t, 4> children{kNone, kNone, kNone, kNone};
+    for (int side = 0; side < 2; ++side) {
+        const std::uint32_t p = parents[side];
+        if (p == kNone) continue;
+        const Triangle P = triangles_[p];
+        const int b = P.base;
+        const std::uint32_t a = P.v[b], bb = P.v[(b + 1) % 3], c = P.v[(b + 2) % 3];
+        const std::uint32_t first =
+            make_child(record, {a, m, c}, {kNone, kNone, P.nb[(b + 2) % 3]}, 2);
+        const std::uint32_t second =
+            make_child(record, {m, bb, c}, {kNone, P.nb[(b + 1) % 3], first}, 1);
+        triangles_[first].nb[1] = second;
+        replace_neighbour(P.nb[(b + 2) % 3], p, first);
+        replace_neighbour(P.nb[(b + 1) % 3], p, second);
+        children[2 * side] = first;
+        children[2 * side + 1] = second;
+        Triangle& Pm = triangles_[p];
+        Pm.state = TriangleState::Split;
+        Pm.split = record;
+        child_was_split(Pm.parent);
+    }
+    if (n != kNone) {  // (a, m) borders (m, a); (m, b) borders (b, m)
+        triangles_[children[0]].nb[0] = children[3];
+        triangles_[children[3]].nb[0] = children[0];
+        triangles_[children[1]].nb[0] = children[2];
+        triangles_[children[2]].nb[0] = children[1];
+    }
+    SplitRecord& R = records_[record];
+    R.vertex = m;
+    R.parents = parents;
+    R.children = children;
+    R.split_children = 0;
+    R.alive = true;
+    const std::size_t child_count = n == kNone ? 2 : 4;
+    ensure_errors({children.data(), child_count});
+    for (std::size_t i = 0; i < child_count; ++i) add_leaf(children[i]);
+    merge_queue_->insert(record, merge_priority(record));
+    ++counters_.splits;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Merges
+
+void Refiner::Impl::merge(std::uint32_t record) {
+    merge_queue_->remove(record);
+    const SplitRecord R = records_[record];
+    assert(R.alive && R.split_children == 0);
+    for (std::uint32_t c : R.children)
+        if (c != kNone) remove_leaf(c);
+    const Vertex& M = vertices_[R.vertex];
+    for (int side = 0; side < 2; ++side) {
+        const std::uint32_t p = R.parents[side];
+        if (p == kNone) continue;
+        const std::uint32_t first = R.children[2 * side], second = R.children[2 * side + 1];
+        Triangle& P = triangles_[p];
+        const int b = P.base;
+        P.nb[(b + 2) % 3] = triangles_[first].nb[2];
+        P.nb[(b + 1) % 3] = triangles_[second].nb[1];
+        replace_neighbour(P.nb[(b + 2) % 3], first, p);
+        replace_neighbour(P.nb[(b + 1) % 3], second, p);
+        // The removed vertex is the parent's projected base midpoint.
+        P.candidate = M.position;
+        P.candidate_normal = M.normal;
+        P.candidate_gradient_norm = M.gradient_norm;
+        P.candidate_on_surface = M.on_surface;
+        P.candidate_version = M.version;
+    }
+    delta_.remove_vertex(M.id);
+    vertices_[R.vertex].alive = false;
+    vertices_.release(R.vertex);
+    for (std::uint32_t c : R.children) {
+        if (c == kNone) continue;
+        triangles_[c].state = TriangleState::Free;
+        triangles_.release(c);
+    }
+    records_[record].alive = false;
+    records_.release(record);
+    for (std::uint32_t p : R.parents) {
+        if (p == kNone) continue;
+        triangles_[p].state = TriangleState::Leaf;  // its midpoint is now its candidate
+        ensure_errors({&p, 1});
+        add_leaf(p);
+        child_became_leaf(triangles_[p].parent);
+    }
+    ++counters_.merges;
+}
+
+MeshStats Refiner::Impl::stats_after_merge(const MeshStats& stats, std::uint32_t record) {
+    const SplitRecord& R = records_[record];
+    MeshStats after = stats;
+    for (std::uint32_t c : R.children) {
+        if (c == kNone) continue;
+        --after.triangles;
+        after.total_error -= triangles_[c].error;
+    }
+    for (std::uint32_t p : R.parents) {
+        if (p == kNone) continue;
+        ++after.triangles;
+        const double e = parent_error(p);
+        after.total_error += e;
+        after.max_error = std::max(after.max_error, e);  // an upper bound: children leave
+    }
+    return after;
+}
+
+}  // namespace isomesh

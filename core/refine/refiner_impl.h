@@ -1,0 +1,277 @@
+// Private to core/refine: the state of a Refiner, shared by the files that implement it:
+// refiner.cpp (structure, steps, views), triangle_errors.cpp (candidates, errors, queue entries),
+// bisection.cpp (splits with their forced splits, merges), dual_queues.cpp (which operation comes
+// next) and function_versions.cpp (set_field). See refiner.cpp for the design.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include <glm/geometric.hpp>
+
+#include "refine/refiner.h"
+
+namespace isomesh {
+namespace refiner_detail {
+
+inline constexpr std::uint32_t kNone = kNoNeighbour;
+static_assert(kNoNeighbour == PriorityQueue::kNone);
+
+enum class TriangleState : std::uint8_t { Leaf, Split, Free };
+
+struct Vertex {
+    std::uint32_t id = 0;
+    glm::dvec3 position{0.0};
+    glm::dvec3 normal{0.0};
+    double gradient_norm = 0.0;  // |grad f| at position; 0 when unknown
+    double scale = 0.0;  // the length of the edge it bisected (phase-1: shortest incident edge)
+    std::uint64_t version = 0;
+    std::int8_t fixed_axis = -1;  // on a face of the meshing box: the coordinate that stays
+    bool on_surface = true;
+    bool alive = false;
+};
+
+struct Triangle {
+    std::uint32_t id = 0;
+    std::array<std::uint32_t, 3> v{};   // vertex slots, counter-clockwise
+    std::array<std::uint32_t, 3> nb{};  // triangle slot across edge v[e]-v[e+1], or kNone
+    std::uint8_t base = 0;
+    TriangleState state = TriangleState::Free;
+    std::uint32_t parent = kNone;  // the split record that created it; kNone for roots
+    std::uint32_t split = kNone;   // the split record that replaced it (state Split)
+    // The base midpoint projected onto the surface: the vertex a split would create.
+    glm::dvec3 candidate{0.0};
+    glm::dvec3 candidate_normal{0.0};
+    double candidate_gradient_norm = 0.0;
+    bool candidate_on_surface = false;
+    std::uint64_t candidate_version = 0;
+    double error = 0.0;
+    std::uint64_t error_version = 0;
+};
+
+struct SplitRecord {
+    std::uint32_t vertex = kNone;
+    std::array<std::uint32_t, 2> parents{kNone, kNone};  // parents[1] = kNone on the boundary
+    std::array<std::uint32_t, 4> children{kNone, kNone, kNone, kNone};  // 0,1 of parents[0]
+    std::uint32_t split_children = 0;  // children that are not leaves
+    bool alive = false;
+};
+
+/// Slots with a free list; freed slots are reused last-in first-out (deterministically).
+template <typename T>
+class Pool {
+  public:
+    std::uint32_t allocate() {
+        if (!free_.empty()) {
+            const std::uint32_t slot = free_.back();
+            free_.pop_back();
+            items_[slot] = T{};
+            return slot;
+        }
+        items_.emplace_back();
+        return static_cast<std::uint32_t>(items_.size() - 1);
+    }
+    void release(std::uint32_t slot) { free_.push_back(slot); }
+    void clear() {
+        items_.clear();
+        free_.clear();
+    }
+    T& operator[](std::uint32_t slot) { return items_[slot]; }
+    const T& operator[](std::uint32_t slot) const { return items_[slot]; }
+    std::uint32_t size() const { return static_cast<std::uint32_t>(items_.size()); }
+
+  private:
+    std::vector<T> items_;
+    std::vector<std::uint32_t> free_;
+};
+
+/// Neumaier's compensated sum, so that adding and removing many errors does not drift.
+class CompensatedSum {
+  public:
+    void add(double x) {
+        const double t = sum_ + x;
+        if (std::abs(sum_) >= std::abs(x))
+            compensation_ += (sum_ - t) + x;
+        else
+            compensation_ += (x - t) + sum_;
+        sum_ = t;
+    }
+    double value() const { return sum_ + compensation_; }
+    void clear() { sum_ = compensation_ = 0.0; }
+
+  private:
+    double sum_ = 0.0;
+    double compensation_ = 0.0;
+};
+
+inline bool finite(const glm::dvec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+inline glm::dvec3 unit_or_zero(const glm::dvec3& v) {
+    const double length = glm::length(v);
+    return length > 0.0 && std::isfinite(length) ? v / length : glm::dvec3(0.0);
+}
+
+/// The axis of the face of the meshing box that a boundary edge a-b lies on, or -1: phase 1 puts
+/// such edges exactly on the box, which the mesh's bounding box `bounds` touches. (A plane such
+/// as x = 0 has every vertex at x = 0: that axis, flat in `bounds`, is not a face.)
+inline std::int8_t face_axis(const glm::dvec3& a, const glm::dvec3& b, const Box& bounds) {
+    for (int k = 0; k < 3; ++k)
+        if (a[k] == b[k] && bounds.lo[k] < bounds.hi[k] &&
+            (a[k] == bounds.lo[k] || a[k] == bounds.hi[k]))
+            return static_cast<std::int8_t>(k);
+    return -1;
+}
+
+/// The forced splits one split needs: chain[0] is the triangle asked for, chain[i + 1] the base
+/// neighbour of chain[i] (whose base edge differs); the last one is bisected with `partner` (its
+/// base neighbour sharing its base edge) or alone on the boundary (partner kNone).
+struct SplitPlan {
+    std::vector<std::uint32_t> chain;
+    std::uint32_t partner = kNone;
+    std::size_t added_triangles = 0;
+    std::size_t bisections() const { return chain.size(); }
+};
+
+}  // namespace refiner_detail
+
+class Refiner::Impl {
+  public:
+    using Vertex = refiner_detail::Vertex;
+    using Triangle = refiner_detail::Triangle;
+    using SplitRecord = refiner_detail::SplitRecord;
+    using SplitPlan = refiner_detail::SplitPlan;
+    template <typename T>
+    using Pool = refiner_detail::Pool<T>;
+    using CompensatedSum = refiner_detail::CompensatedSum;
+    static constexpr std::uint32_t kNone = refiner_detail::kNone;
+
+    Impl(std::shared_ptr<const Field> field, const Mesh& first_mesh, RefineSettings settings);
+
+    StepResult step(const StepBudget& budget, bool take_delta);
+    void set_field(std::shared_ptr<const Field> field);
+    void set_constraint(Constraint c) { constraint_ = std::move(c); }
+    const Constraint& constraint() const { return constraint_; }
+    std::uint64_t version() const { return version_; }
+    MeshStats stats() const;
+    QueueEnds queue_ends() const {
+        return {split_queue_->extreme_priority(), merge_queue_->extreme_priority()};
+    }
+    const RefineCounters& counters() const { return counters_; }
+    RefinedMesh mesh() const;
+    MeshDelta snapshot() const;
+    MeshDelta take_delta() { return delta_.take(); }
+
+  private:
+    // --- structure
+    void load(const Mesh& input);
+    void clear_all_into_delta();
+    DeltaTriangle delta_triangle(std::uint32_t t) const;
+    DeltaVertex delta_vertex(std::uint32_t v) const;
+    const glm::dvec3& position(std::uint32_t t, int corner) const {
+        return vertices_[triangles_[t].v[corner % 3]].position;
+    }
+    double base_length(std::uint32_t t) const {
+        const Triangle& T = triangles_[t];
+        return glm::length(position(t, T.base + 1) - position(t, T.base));
+    }
+    /// Splittable: every edge at least min_edge_length. Splitting a triangle with a shorter edge
+    /// (coincident vertices in the input) would only make more degenerate triangles.
+    bool splittable(std::uint32_t t) const {
+        for (int e = 0; e < 3; ++e)
+            if (!(glm::length(position(t, e + 1) - position(t, e)) >= settings_.min_edge_length))
+                return false;
+        return true;
+    }
+    bool is_diamond(std::uint32_t t, std::uint32_t n) const {
+        return n != kNone && triangles_[n].nb[triangles_[n].base] == t;
+    }
+    void replace_neighbour(std::uint32_t t, std::uint32_t old_nb, std::uint32_t new_nb);
+
+    // --- errors and queues
+    ProjectionRequest candidate_request(std::uint32_t t) const;
+    /// Projects the base midpoints of `tris` that lack a current one (one batched projection).
+    void ensure_candidates(std::span<const std::uint32_t> tris);
+    TriangleGeometry geometry(std::uint32_t t) const;
+    /// Brings the errors of `tris` to the current version (one batched evaluation). A split
+    /// triangle's projected midpoint is the vertex its split created.
+    void ensure_errors(std::span<const std::uint32_t> tris);
+    /// Makes t a leaf; its error must be current.
+    void add_leaf(std::uint32_t t);
+    void remove_leaf(std::uint32_t t);
+    double parent_error(std::uint32_t parent);
+    double merge_priority(std::uint32_t record);
+    void child_became_leaf(std::uint32_t record);
+    void child_was_split(std::uint32_t record);
+
+    // --- operations
+    bool plan_split(std::uint32_t t, SplitPlan& plan);
+    void execute(const SplitPlan& plan);
+    void bisect(std::uint32_t t, std::uint32_t partner);
+    std::uint32_t make_child(std::uint32_t record, std::array<std::uint32_t, 3> v,
+                             std::array<std::uint32_t, 3> nb, std::uint8_t base);
+    void merge(std::uint32_t record);
+    MeshStats stats_after_merge(const MeshStats& stats, std::uint32_t record);
+    bool acceptable_split(const MeshStats& stats, const SplitPlan& plan) const;
+    bool find_split(const MeshStats& stats, SplitPlan& plan);
+    bool conflicts(const SplitPlan& plan, std::uint32_t record) const;
+    std::size_t act();  // one split, merge or exchange; returns operations done, 0 when idle
+    std::size_t try_exchange(const MeshStats& stats);
+    bool choose_merges(const MeshStats& stats, const SplitPlan& plan, double below);
+
+    // --- function versions
+    bool refresh_pending() const;
+    /// Refreshes up to `limit` (> 0) items of the current stage; returns how many.
+    std::size_t refresh_some(std::size_t limit);
+    void refresh_vertices(std::span<const std::uint32_t> vertices);
+    void refresh_leaves(std::span<const std::uint32_t> leaves);
+    void refresh_records(std::span<const std::uint32_t> records);
+    void restart();
+
+    RefineSettings settings_;
+    Constraint constraint_;
+    std::shared_ptr<const Field> field_;
+    std::unique_ptr<Evaluator> evaluator_;
+    std::uint64_t version_ = 1;
+
+    Pool<Vertex> vertices_;
+    Pool<Triangle> triangles_;
+    Pool<SplitRecord> records_;
+    std::unique_ptr<PriorityQueue> split_queue_;    // leaves that may be split
+    std::unique_ptr<PriorityQueue> blocked_queue_;  // leaves too small to split
+    std::unique_ptr<PriorityQueue> merge_queue_;    // records whose children are all leaves
+    std::size_t leaf_count_ = 0;
+    CompensatedSum total_error_;
+    double root_edge_length_ = 0.0;  // mean edge length of the phase-1 mesh
+    Box bounds_;                     // bounding box of the phase-1 mesh
+    bool has_boundary_ = false;      // some edge has one triangle (then splits may add 1)
+
+    std::uint32_t next_vertex_id_ = 0;
+    std::uint32_t next_triangle_id_ = 0;
+    DeltaBuilder delta_;
+    RefineCounters counters_;
+    SplitPlan plan_;  // scratch
+    std::vector<std::uint32_t> exchange_merges_;
+    std::vector<std::uint32_t> stale_, pending_;
+    std::vector<ProjectionRequest> requests_;
+    std::vector<Projection> projections_;
+    std::vector<TriangleGeometry> geometries_;
+    std::vector<double> errors_;
+
+    // Refresh after set_field: vertices, then leaves, then mergeable records.
+    enum class RefreshStage : std::uint8_t { None, Vertices, Leaves, Records };
+    RefreshStage refresh_stage_ = RefreshStage::None;
+    std::vector<std::uint32_t> refresh_list_;
+    std::size_t refresh_next_ = 0;
+    std::optional<Mesh> fresh_phase1_;  // the new function's phase-1 mesh, if computed
+    bool restart_pending_ = false;
+};
+
+}  // namespace isomesh
