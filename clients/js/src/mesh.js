@@ -9,8 +9,8 @@
 // - A gap (a delta after a missing one) or an inconsistent delta stops the mesh until the next
 //   keyframe, which the client asks for with `resync`.
 //
-// Vertices are reference-counted by the triangles that use them and dropped when unused: every
-// payload carries all the vertices its triangles use.
+// Vertices (VertexTable) are reference-counted by the triangles that use them and dropped when
+// unused: every payload carries all the vertices its triangles use.
 
 import { TriangleSlots } from './slots.js';
 
@@ -22,12 +22,116 @@ export const Outcome = Object.freeze({
   inconsistent: 'inconsistent',
 });
 
+/**
+ * The live vertices: global id -> a row of typed arrays (position, normal, number of triangles
+ * using it). Rows of dropped vertices are reused.
+ */
+export class VertexTable {
+  constructor(capacity = 1024) {
+    this.rowOf = new Map();
+    this.free = [];
+    this.size = 0; // rows ever used
+    this.#allocate(Math.max(1, capacity));
+  }
+
+  get count() {
+    return this.rowOf.size;
+  }
+
+  has(id) {
+    return this.rowOf.has(id);
+  }
+
+  /** {position: [x, y, z], normal: [x, y, z], uses} of vertex `id`, or undefined. */
+  get(id) {
+    const row = this.rowOf.get(id);
+    if (row === undefined) return undefined;
+    const p = this.positions.subarray(3 * row, 3 * row + 3);
+    const n = this.normals.subarray(3 * row, 3 * row + 3);
+    return { position: Array.from(p), normal: Array.from(n), uses: this.uses[row] };
+  }
+
+  /** The ids, in no particular order (as Map.keys()). */
+  keys() {
+    return this.rowOf.keys();
+  }
+
+  /**
+   * Sets vertex `id` to point `p` of the decoded arrays; returns 1 if a live vertex changed
+   * value, else 0.
+   */
+  set(id, positions, normals, p) {
+    let row = this.rowOf.get(id);
+    if (row === undefined) {
+      row = this.free.pop() ?? this.#newRow();
+      this.rowOf.set(id, row);
+      this.uses[row] = 0;
+      this.#copy(row, positions, normals, p);
+      return 0;
+    }
+    if (this.#same(row, positions, normals, p)) return 0;
+    this.#copy(row, positions, normals, p);
+    return 1;
+  }
+
+  /** One more triangle uses vertex `id` (present). */
+  use(id) {
+    ++this.uses[this.rowOf.get(id)];
+  }
+
+  /** One triangle fewer uses vertex `id`; the vertex is dropped when none does. */
+  release(id) {
+    const row = this.rowOf.get(id);
+    if (--this.uses[row] === 0) {
+      this.rowOf.delete(id);
+      this.free.push(row);
+    }
+  }
+
+  clear() {
+    this.rowOf.clear();
+    this.free = [];
+    this.size = 0;
+  }
+
+  #newRow() {
+    if (this.size === this.uses.length) this.#allocate(2 * this.uses.length);
+    return this.size++;
+  }
+
+  #copy(row, positions, normals, p) {
+    for (let k = 0; k < 3; ++k) {
+      this.positions[3 * row + k] = positions[3 * p + k];
+      this.normals[3 * row + k] = normals[3 * p + k];
+    }
+  }
+
+  #same(row, positions, normals, p) {
+    for (let k = 0; k < 3; ++k) {
+      if (this.positions[3 * row + k] !== positions[3 * p + k] || this.normals[3 * row + k] !== normals[3 * p + k]) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  #allocate(capacity) {
+    const grow = (Type, old, per) => {
+      const array = new Type(capacity * per);
+      if (old) array.set(old);
+      return array;
+    };
+    this.positions = grow(Float32Array, this.positions, 3);
+    this.normals = grow(Float32Array, this.normals, 3);
+    this.uses = grow(Uint32Array, this.uses, 1);
+  }
+}
+
 export class SessionMesh {
   /** @param {{initialCapacity?: number}} [options] */
   constructor(options = {}) {
     this.slots = new TriangleSlots(options.initialCapacity ?? 4096);
-    /** Global vertex id -> {position: [x, y, z], normal: [x, y, z], uses}. */
-    this.vertices = new Map();
+    this.vertices = new VertexTable((options.initialCapacity ?? 4096) / 2);
     this.synchronized = false;
     this.sequence = -1;
     this.functionVersion = 0;
@@ -84,15 +188,15 @@ export class SessionMesh {
    * `indices` (3 per triangle, in slot order) into them.
    */
   toIndexed() {
-    const { slots } = this;
-    const vertexIds = [...this.vertices.keys()].sort((a, b) => a - b);
+    const { slots, vertices } = this;
+    const vertexIds = [...vertices.keys()].sort((a, b) => a - b);
     const index = new Map(vertexIds.map((id, i) => [id, i]));
     const positions = new Float32Array(3 * vertexIds.length);
     const normals = new Float32Array(3 * vertexIds.length);
     vertexIds.forEach((id, i) => {
-      const v = this.vertices.get(id);
-      positions.set(v.position, 3 * i);
-      normals.set(v.normal, 3 * i);
+      const row = vertices.rowOf.get(id);
+      positions.set(vertices.positions.subarray(3 * row, 3 * row + 3), 3 * i);
+      normals.set(vertices.normals.subarray(3 * row, 3 * row + 3), 3 * i);
     });
     const indices = new Uint32Array(3 * slots.count);
     for (let c = 0; c < indices.length; ++c) indices[c] = index.get(slots.vertexIds[c]);
@@ -121,11 +225,7 @@ export class SessionMesh {
   #removeTriangle(id) {
     const { slots } = this;
     const slot = slots.slotOf(id);
-    for (let k = 0; k < 3; ++k) {
-      const vertexId = slots.vertexIds[3 * slot + k];
-      const vertex = this.vertices.get(vertexId);
-      if (--vertex.uses === 0) this.vertices.delete(vertexId);
-    }
+    for (let k = 0; k < 3; ++k) this.vertices.release(slots.vertexIds[3 * slot + k]);
     slots.release(id);
   }
 
@@ -135,26 +235,16 @@ export class SessionMesh {
     const { mesh, triangleIds } = frame;
     if (!mesh) return changed;
     const { globalIds, positions, normals, faces } = mesh;
+    const { vertices, slots } = this;
     for (let p = 0; p < globalIds.length; ++p) {
-      const id = globalIds[p];
-      const position = [positions[3 * p], positions[3 * p + 1], positions[3 * p + 2]];
-      const normal = [normals[3 * p], normals[3 * p + 1], normals[3 * p + 2]];
-      const known = this.vertices.get(id);
-      if (!known) {
-        this.vertices.set(id, { position, normal, uses: 0 });
-      } else if (!sameValues(known, position, normal)) {
-        known.position = position;
-        known.normal = normal;
-        changed.add(id);
-      }
+      if (vertices.set(globalIds[p], positions, normals, p)) changed.add(globalIds[p]);
     }
-    const { slots } = this;
     for (let t = 0; t < triangleIds.length; ++t) {
       const slot = slots.insert(triangleIds[t]);
       for (let k = 0; k < 3; ++k) {
         const p = faces[3 * t + k];
         const id = globalIds[p];
-        ++this.vertices.get(id).uses;
+        vertices.use(id);
         slots.write(slot, k, id, positions[3 * p], positions[3 * p + 1], positions[3 * p + 2],
           normals[3 * p], normals[3 * p + 1], normals[3 * p + 2]);
       }
@@ -169,17 +259,11 @@ export class SessionMesh {
       for (let k = 0; k < 3; ++k) {
         const id = slots.vertexIds[3 * s + k];
         if (!changed.has(id)) continue;
-        const { position: p, normal: n } = this.vertices.get(id);
-        slots.write(s, k, id, p[0], p[1], p[2], n[0], n[1], n[2]);
+        const { positions: p, normals: n } = this.vertices;
+        const r = 3 * this.vertices.rowOf.get(id);
+        slots.write(s, k, id, p[r], p[r + 1], p[r + 2], n[r], n[r + 1], n[r + 2]);
         slots.touch(s);
       }
     }
   }
-}
-
-function sameValues(vertex, position, normal) {
-  const p = vertex.position;
-  const n = vertex.normal;
-  return p[0] === position[0] && p[1] === position[1] && p[2] === position[2] &&
-    n[0] === normal[0] && n[1] === normal[1] && n[2] === normal[2];
 }
