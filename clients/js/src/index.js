@@ -12,7 +12,7 @@ export {
   FRAME_FLAG_CONVERGED,
   FRAME_FLAG_CATCH_UP,
 } from './frame.js';
-export { SessionMesh, Outcome } from './mesh.js';
+export { SessionMesh, VertexTable, Outcome } from './mesh.js';
 export { PROTOCOL_VERSION, parseServerMessage, requestText } from './messages.js';
 export { TriangleSlots } from './slots.js';
 export {
