@@ -34,7 +34,7 @@ void Refiner::Impl::set_field(std::shared_ptr<const Field> field) {
     fresh_phase1_.reset();
     if (settings_.phase1) {
         fresh_phase1_ = settings_.phase1(*field_);
-        if (!same_topology(analyze_topology(*fresh_phase1_), analyze_topology(mesh().mesh))) {
+        if (!same_topology(analyze_topology(*fresh_phase1_), root_topology_)) {
             restart_pending_ = true;
             return;
         }

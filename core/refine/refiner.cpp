@@ -49,7 +49,10 @@ std::unique_ptr<PriorityQueue> make_queue(QueueKind kind, QueueOrder order,
 
 }  // namespace
 
-std::string validate_refinable(const Mesh& mesh) {
+namespace {
+
+// The checks analyze_topology cannot make, or needs made first (it throws on bad indices).
+std::string index_and_value_problem(const Mesh& mesh) {
     const std::size_t n = mesh.positions.size();
     if (!mesh.normals.empty() && mesh.normals.size() != n)
         return "normals and positions differ in size";
@@ -69,11 +72,21 @@ std::string validate_refinable(const Mesh& mesh) {
     std::sort(sorted.begin(), sorted.end());
     if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
         return "two triangles have the same three vertices";
-    const TopologyReport report = analyze_topology(mesh);
+    return {};
+}
+
+std::string topology_problem(const TopologyReport& report) {
     if (report.nonmanifold_edges != 0) return "an edge is shared by three or more triangles";
     if (report.inconsistently_oriented_edges != 0)
         return "two triangles disagree on orientation across an edge";
     return {};
+}
+
+}  // namespace
+
+std::string validate_refinable(const Mesh& mesh) {
+    const std::string problem = index_and_value_problem(mesh);
+    return problem.empty() ? topology_problem(analyze_topology(mesh)) : problem;
 }
 
 Refiner::Impl::Impl(std::shared_ptr<const Field> field, const Mesh& first_mesh,
@@ -96,7 +109,11 @@ Refiner::Impl::Impl(std::shared_ptr<const Field> field, const Mesh& first_mesh,
 // Structure
 
 void Refiner::Impl::load(const Mesh& input) {
-    const std::string problem = validate_refinable(input);
+    std::string problem = index_and_value_problem(input);
+    if (problem.empty()) {
+        root_topology_ = analyze_topology(input);
+        problem = topology_problem(root_topology_);
+    }
     if (!problem.empty()) throw std::invalid_argument("Refiner: " + problem);
     Mesh mesh = input;
     build_adjacency(mesh);
@@ -211,7 +228,8 @@ StepResult Refiner::Impl::step(const StepBudget& budget, bool take) {
             result.cancelled = true;
             break;
         }
-        if (budget.microseconds > 0 &&
+        // A step makes progress whatever its time budget: the first operation is always done.
+        if (budget.microseconds > 0 && operations > 0 &&
             Clock::now() - start >= std::chrono::microseconds(budget.microseconds))
             break;
         if (restart_pending_) {

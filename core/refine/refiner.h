@@ -74,7 +74,8 @@ struct StepBudget {
     /// Operations: bisections (a forced chain is not cut: the last split may exceed the budget),
     /// merges, and vertices or triangles refreshed after a function change.
     std::size_t operations = 1024;
-    /// Wall-clock limit in microseconds; 0 means none. Not deterministic.
+    /// Wall-clock limit in microseconds, checked between operations after the first; 0 means
+    /// none. Not deterministic.
     std::int64_t microseconds = 0;
 };
 

@@ -15,6 +15,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "mesh/topology.h"
 #include "refine/refiner.h"
 
 namespace isomesh {
@@ -251,7 +252,9 @@ class Refiner::Impl {
     CompensatedSum total_error_;
     double root_edge_length_ = 0.0;  // mean edge length of the phase-1 mesh
     Box bounds_;                     // bounding box of the phase-1 mesh
-    bool has_boundary_ = false;      // some edge has one triangle (then splits may add 1)
+    // The phase-1 mesh's topology, which conforming splits and merges never change.
+    TopologyReport root_topology_;
+    bool has_boundary_ = false;  // some edge has one triangle (then splits may add 1)
 
     std::uint32_t next_vertex_id_ = 0;
     std::uint32_t next_triangle_id_ = 0;
