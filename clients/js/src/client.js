@@ -42,6 +42,9 @@ function utf8Length(text) {
  * @param {number} [options.requestTimeoutMs] reject a request whose reply takes longer (30000)
  * @param {boolean} [options.autoResync] send `resync` on a sequence gap (true)
  * @param {number} [options.initialCapacity] triangles each session's slot table starts with
+ * @param {boolean} [options.deferFrames] queue binary frames instead of applying them on
+ *   receipt; the application then applies them with drainFrames(deadline), e.g. a few
+ *   milliseconds per animation frame, so that rendering stays smooth while refinement streams
  * @returns {Promise<IsomeshClient>}
  */
 export function connect(url, options = {}) {
@@ -71,6 +74,8 @@ export class IsomeshClient extends Emitter {
     this.closed = false;
     this.pending = new Map();
     this.nextRequestId = 1;
+    this.frameQueue = []; // with deferFrames: frames not applied yet, from frameQueueHead on
+    this.frameQueueHead = 0;
     socket.binaryType = 'arraybuffer';
     this.opened = new Promise((resolve, reject) => {
       socket.onopen = () => resolve();
@@ -132,6 +137,31 @@ export class IsomeshClient extends Emitter {
     if (!this.closed) this.socket.send(requestText(type, undefined, fields));
   }
 
+  /**
+   * With deferFrames: applies the queued frames in order until performance.now() passes
+   * `deadline` (at least one frame per call). Returns how many frames remain queued.
+   */
+  drainFrames(deadline = Infinity) {
+    const queue = this.frameQueue;
+    let applied = 0;
+    while (this.frameQueueHead < queue.length && (applied === 0 || now() < deadline)) {
+      const bytes = queue[this.frameQueueHead];
+      queue[this.frameQueueHead++] = null;
+      this.#applyFrame(bytes);
+      ++applied;
+    }
+    if (this.frameQueueHead === queue.length) {
+      this.frameQueue = [];
+      this.frameQueueHead = 0;
+    }
+    return this.pendingFrames;
+  }
+
+  /** Frames received but not applied yet (always 0 without deferFrames). */
+  get pendingFrames() {
+    return this.frameQueue.length - this.frameQueueHead;
+  }
+
   /** Closes the connection (sessions it created expire on the server unless others subscribe). */
   close() {
     this.socket.close(1000, 'client closed');
@@ -151,7 +181,11 @@ export class IsomeshClient extends Emitter {
     if (typeof data === 'string') {
       this.#receiveText(data);
     } else {
-      this.#receiveFrame(data instanceof ArrayBuffer ? new Uint8Array(data) : new Uint8Array(data.buffer, data.byteOffset, data.byteLength));
+      const bytes = data instanceof ArrayBuffer ? new Uint8Array(data) : new Uint8Array(data.buffer, data.byteOffset, data.byteLength);
+      this.bytesReceived += bytes.length;
+      ++this.framesReceived;
+      if (this.options.deferFrames) this.frameQueue.push(bytes);
+      else this.#applyFrame(bytes);
     }
   }
 
@@ -190,9 +224,7 @@ export class IsomeshClient extends Emitter {
     }
   }
 
-  #receiveFrame(bytes) {
-    this.bytesReceived += bytes.length;
-    ++this.framesReceived;
+  #applyFrame(bytes) {
     let frame;
     try {
       frame = decodeFrame(bytes, this.decoder);

@@ -188,3 +188,19 @@ test('bad arguments fail before anything is sent', async () => {
   await assert.rejects(client.create({ expression: 'x=1', constraints: { triangles: 0.5 } }), /triangles/);
   assert.equal(socket.sent.length, 0);
 });
+
+test('deferred frames wait for drainFrames and apply in order', async () => {
+  const client = await connect('ws://x', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder(), deferFrames: true });
+  const socket = FakeSocket.last;
+  const session = await created(client, socket);
+  socket.frame({ kind: 'keyframe', sequence: 0, triangleIds: [1, 2], mesh: square });
+  socket.frame({ sequence: 1, removed: [2] });
+  socket.frame({ sequence: 2, removed: [1] });
+  assert.equal(session.mesh.triangleCount, 0, 'nothing applied yet');
+  assert.equal(client.pendingFrames, 3);
+  assert.equal(client.drainFrames(0), 2, 'a deadline in the past still applies one frame');
+  assert.equal(session.mesh.triangleCount, 2);
+  assert.equal(client.drainFrames(), 0);
+  assert.equal(session.mesh.triangleCount, 0);
+  assert.equal(session.mesh.sequence, 2);
+});

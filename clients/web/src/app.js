@@ -1,6 +1,7 @@
 // The viewer's session logic: one connection, one session, and the user's edits turned into
 // `update` requests.
 //
+// Frames are applied a few milliseconds per animation frame (drainFrames), not on receipt.
 // Edits are coalesced: at most one update is in flight; edits made meanwhile (a slider being
 // dragged) are merged and sent when its reply arrives, so the surface follows the latest value at
 // the pace of the round trip instead of queueing every intermediate one. The state the server
@@ -40,7 +41,7 @@ export class App {
   async start() {
     this.#setStatus('connecting');
     try {
-      this.client = await connect(this.url, { decoder: this.decoder });
+      this.client = await connect(this.url, { decoder: this.decoder, deferFrames: true });
     } catch (error) {
       this.#disconnected(error.message);
       return;
@@ -49,6 +50,17 @@ export class App {
     this.client.on('close', () => this.#disconnected('connection closed'));
     this.client.on('error', (error) => console.warn('isomesh:', error));
     await this.#createSession();
+  }
+
+  /**
+   * Applies received frames for at most `budgetMs` (called once per animation frame, so that
+   * decoding never stalls rendering); returns true when any was applied.
+   */
+  drainFrames(budgetMs) {
+    const client = this.client;
+    if (!client || client.pendingFrames === 0) return false;
+    client.drainFrames(performance.now() + budgetMs);
+    return true;
   }
 
   // ---- user edits ------------------------------------------------------------------------------

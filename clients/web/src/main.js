@@ -17,6 +17,7 @@ const defaultUrl = `${location.protocol === 'https:' ? 'wss:' : 'ws:'}//${locati
 const url = query.get('server') ?? defaultUrl;
 const first = query.get('expr') ? { expression: query.get('expr'), box: [-3, 3, -3, 3, -3, 3] } : GALLERY[0];
 
+const FRAME_BUDGET_MS = 8;
 const statusLine = document.querySelector('#status');
 let app = null;
 
@@ -72,6 +73,16 @@ let statusQueued = false;
 async function main() {
   const decoder = await loadDracoDecoder({ locateFile: () => dracoWasmUrl });
   app = new App({ panel, viewer, url, decoder, initial: first });
+  // 8 ms of frame decoding per animation frame keeps orbiting smooth while refinement streams;
+  // a hidden page gets no animation frames, so a timer drains the queue there.
+  let lastDrain = performance.now();
+  viewer.hooks.beforeRender = () => {
+    lastDrain = performance.now();
+    return app.drainFrames(FRAME_BUDGET_MS);
+  };
+  setInterval(() => {
+    if (performance.now() - lastDrain > 200) app.drainFrames(Infinity);
+  }, 250);
   app.onStatus = () => {
     // At most one status line update per animation frame, however many frames arrive.
     if (statusQueued) return;
