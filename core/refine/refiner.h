@@ -15,14 +15,18 @@
 //   number of triangles a split creates known before it is made.
 // - merge: undo a split whose children are all unsplit; every phase-1 triangle is the root of its
 //   own tree of splits (the thesis's "multi-rooted tree", 3.2.3).
-// - refresh: after set_field, move every vertex onto the new surface and re-prioritise.
+// - refresh: after set_field, move every vertex onto the new surface and re-prioritise (in
+//   batches of evaluations).
 // The split queue orders unsplit triangles by error, largest first; the merge queue orders
 // mergeable splits by the larger error of the triangles a merge restores, smallest first (ROAM's
 // dual queues). While the constraint wants refinement the best split that does not overshoot it is
 // made; while the mesh would still satisfy it after a merge (or is over a triangle budget) the
-// best merge is made; otherwise a split and a merge are exchanged while the split's priority
-// exceeds the merge's by settings.swap_ratio. The mesh is then optimal for the constraint in
-// ROAM's sense.
+// best merge is made; otherwise the cheapest merges are exchanged for a split worth swap_ratio
+// times more than each. The mesh is then optimal for the constraint in ROAM's sense, up to that
+// hysteresis (see queue_ends).
+//
+// Exceptions thrown by the field's evaluator pass through step(); the refiner may then be in the
+// middle of an operation and must be discarded.
 //
 // Determinism: the operation sequence depends only on the input mesh, the function, the settings
 // and the sequence of calls (set_constraint, set_field), never on how operation-count budgets cut
@@ -33,6 +37,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "eval/evaluator.h"
@@ -62,9 +67,10 @@ struct RefineSettings {
     /// edges; a guard against malformed input).
     std::size_t max_forced_chain = 4096;
     /// Phase 1 for a new function (usually polygonize with the session's settings). When set,
-    /// set_field compares the topology of a fresh phase-1 mesh with the current mesh and restarts
-    /// from the fresh mesh when they differ, or when a vertex cannot be moved onto the new surface.
-    /// When empty, set_field only moves the existing vertices.
+    /// set_field compares the topology (components, Euler characteristic, closed or not) of a
+    /// fresh phase-1 mesh with the current mesh's (which is its own phase-1 mesh's: splits and
+    /// merges keep it) and restarts from the fresh mesh when they differ, or when a vertex cannot
+    /// be moved onto the new surface. When empty, set_field only moves the existing vertices.
     std::function<Mesh(const Field&)> phase1;
     /// Checked between operations; step() returns early when it becomes true.
     const std::atomic<bool>* cancel = nullptr;
@@ -138,7 +144,8 @@ class Refiner {
 
     StepResult step(const StepBudget& budget);
     /// Steps until converged or cancelled (`operations_per_step` operations at a time); returns
-    /// the merged delta.
+    /// the merged delta. Precondition: the constraint can be met (an error bound alone on a
+    /// surface with a singularity may refine until memory runs out: add a triangle budget).
     StepResult run_to_convergence(std::size_t operations_per_step = 4096);
 
     void set_constraint(Constraint constraint);
