@@ -8,10 +8,9 @@ import {
   AxesHelper,
   Box3,
   Box3Helper,
-  BackSide,
   Color,
   DirectionalLight,
-  FrontSide,
+  DoubleSide,
   Mesh,
   MeshBasicMaterial,
   MeshPhongMaterial,
@@ -65,14 +64,31 @@ export class Viewer {
     this.renderer.setAnimationLoop(() => this.#tick());
   }
 
+  /**
+   * The surface in one pass, both sides lit (DoubleSide flips the normal of back faces), back
+   * faces in their own color so the inside of an open surface reads as such; then the optional
+   * wireframe, drawn over it (the surface is pushed back by a polygon offset).
+   */
   #addSurface() {
-    const shared = { polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1, shininess: 40 };
     const geometry = this.slotGeometry.geometry;
-    this.front = new Mesh(geometry, new MeshPhongMaterial({ ...shared, color: FRONT_COLOR, side: FrontSide }));
-    this.back = new Mesh(geometry, new MeshPhongMaterial({ ...shared, color: BACK_COLOR, side: BackSide }));
+    const material = new MeshPhongMaterial({
+      color: FRONT_COLOR,
+      side: DoubleSide,
+      shininess: 40,
+      polygonOffset: true,
+      polygonOffsetFactor: 1,
+      polygonOffsetUnits: 1,
+    });
+    material.onBeforeCompile = (shader) => {
+      shader.uniforms.backColor = { value: new Color(BACK_COLOR) };
+      shader.fragmentShader = shader.fragmentShader
+        .replace('void main() {', 'uniform vec3 backColor;\nvoid main() {')
+        .replace('vec4 diffuseColor = vec4( diffuse, opacity );', 'vec4 diffuseColor = vec4( gl_FrontFacing ? diffuse : backColor, opacity );');
+    };
+    this.surface = new Mesh(geometry, material);
     this.wire = new Mesh(geometry, new MeshBasicMaterial({ color: 0x202830, wireframe: true, transparent: true, opacity: 0.35 }));
     this.wire.visible = false;
-    for (const mesh of [this.front, this.back, this.wire]) {
+    for (const mesh of [this.surface, this.wire]) {
       mesh.frustumCulled = false; // the bounding sphere changes with every delta
       this.scene.add(mesh);
     }
