@@ -426,6 +426,9 @@ export class Session extends Emitter {
   #lostStep(reason) {
     if (!this.client.options.autoResync || this.resyncPending || this.closed) return;
     this.emit('resync', { reason });
-    this.resync().catch((error) => this.emit('error', error));
+    this.resync().catch((error) => {
+      this.resyncPending = false; // the next gap may try again
+      this.emit('error', error);
+    });
   }
 }
