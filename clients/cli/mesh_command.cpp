@@ -14,6 +14,7 @@
 #include "output.h"
 #include "polygonize/polygonizer.h"
 #include "refine_options.h"
+#include "server_mesh.h"
 
 namespace isomesh::cli {
 
@@ -23,6 +24,7 @@ constexpr std::string_view kUsage =
     R"(usage: isomesh mesh EXPR -o FILE [--param NAME=VALUE]... [--box x0,x1,y0,y1,z0,z1]
                     [--depth MIN,MAX] [--threads N] [--stats]
                     [--triangles N] [--max-error E] [--error-measure M]
+                    [--server ws://HOST:PORT/ws]
 
 Meshes the surface EXPR = 0 (an equation such as 'x^2+y^2+z^2=1', '@model.vm' for a Fidget
 model, or '@grid.iso' for a sampled grid at isovalue 0) with an octree and Marching Cubes 33,
@@ -41,7 +43,8 @@ every vertex on the surface, and writes it to FILE:
 
 constexpr OptionSpec kOptions[] = {{"output", true, false},  {"param", true, true},
                                    {"box", true, false},     {"depth", true, false},
-                                   {"threads", true, false}, {"stats", false, false}};
+                                   {"threads", true, false}, {"stats", false, false},
+                                   {"server", true, false}};
 
 /// `-o FILE` is accepted as `--output FILE`.
 std::vector<std::string_view> expand_short_options(std::span<const std::string_view> args) {
@@ -119,6 +122,7 @@ int run_mesh(std::span<const std::string_view> raw_args) {
     if (args.help()) {
         std::fputs(kUsage.data(), stdout);
         std::fputs(kRefineUsage.data(), stdout);
+        std::fputs(kServerUsage.data(), stdout);
         return 0;
     }
     const RefineOptions refine_options = parse_refine_options(args);
@@ -144,6 +148,12 @@ int run_mesh(std::span<const std::string_view> raw_args) {
         throw UsageError("-o: the file name must end in .glb, .stl, .ply or .obj");
     }
     const std::string_view source = args.positional()[0];
+    if (args.has("server") &&
+        (args.has("depth") || args.has("threads") || names_iso_file(source))) {
+        throw UsageError(
+            "--server meshes functions with the server's depths and threads: "
+            "no --depth, --threads or .iso grid");
+    }
     const std::shared_ptr<const Field> field = load_field(source, args.values("param"));
     if (!field) return 1;
     if (args.has("box")) {
@@ -152,6 +162,11 @@ int run_mesh(std::span<const std::string_view> raw_args) {
         settings.box = field->domain();
     }
 
+    if (args.has("server")) {
+        const protocol::Create request =
+            server_request(source, args.values("param"), settings.box, refine_options);
+        return mesh_on_server(*args.value("server"), request, output, args.has("stats"));
+    }
     const PolygonizeResult result = polygonize(*field, settings);
     std::optional<RefineOutcome> refined;
     if (refine_options.refine()) refined = refine_first_mesh(field, result.mesh, refine_options);

@@ -7,11 +7,6 @@
 #include "refine/refiner.h"
 
 namespace isomesh::cli {
-namespace {
-
-constexpr std::size_t kDefaultCap = 2'000'000;
-
-}  // namespace
 
 RefineOptions parse_refine_options(const Arguments& args) {
     RefineOptions options;
@@ -46,7 +41,8 @@ RefineOutcome refine_first_mesh(std::shared_ptr<const Field> field, const Mesh& 
     const auto start = std::chrono::steady_clock::now();
     RefineSettings settings;
     settings.error_measure = make_error_measure(options.error_measure);
-    Constraint budget = Constraint::triangle_budget(options.triangles.value_or(kDefaultCap));
+    Constraint budget =
+        Constraint::triangle_budget(options.triangles.value_or(kDefaultTriangleCap));
     settings.constraint = options.max_error
                               ? Constraint::max_error(*options.max_error) && std::move(budget)
                               : std::move(budget);

@@ -18,6 +18,9 @@ namespace isomesh::cli {
 inline constexpr OptionSpec kRefineOptionSpecs[] = {
     {"triangles", true, false}, {"max-error", true, false}, {"error-measure", true, false}};
 
+/// The triangle budget of --max-error without --triangles (also the server's default maximum).
+inline constexpr std::size_t kDefaultTriangleCap = 2'000'000;
+
 /// Phase 1 for refinement starts coarser than for phase 1 alone (unless --depth says otherwise):
 /// refinement spends triangles better than a uniform octree level (tests/refine/accuracy_test).
 inline constexpr int kRefineMinDepth = 3;

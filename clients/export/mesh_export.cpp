@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cctype>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <stdexcept>
@@ -18,13 +19,9 @@
 namespace isomesh {
 namespace {
 
+/// ".glb" for "dir/Mesh.GLB"; "" when the file name has no extension.
 std::string lower_extension(std::string_view path) {
-    const auto dot = path.find_last_of('.');
-    const auto slash = path.find_last_of("/\\");
-    if (dot == std::string_view::npos || (slash != std::string_view::npos && dot < slash)) {
-        return "";
-    }
-    std::string ext(path.substr(dot));
+    std::string ext = std::filesystem::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     return ext;

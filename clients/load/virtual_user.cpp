@@ -49,7 +49,8 @@ void VirtualUser::start(net::WsEventLoop& loop, const net::Url& url) {
         }
     };
     handlers.closed = [self](const std::string& error) { self->on_closed(error); };
-    connection_ = loop.connect(url, std::move(handlers));
+    connection_ = loop.connection(url, std::move(handlers));
+    connection_->start();
 }
 
 void VirtualUser::stop() {

@@ -38,7 +38,8 @@ struct WsClient::Inbox {
 };
 
 WsClient::WsClient(const Url& url, const WsOptions& options) : inbox_(std::make_shared<Inbox>()) {
-    connection_ = loop_.connect(url, inbox_->handlers(inbox_), options);
+    connection_ = loop_.connection(url, inbox_->handlers(inbox_), options);
+    connection_->start();
     std::unique_lock lock(inbox_->mutex);
     // The connection's own timeout bounds this wait.
     inbox_->changed.wait(lock, [&] { return inbox_->open || inbox_->ended; });

@@ -50,7 +50,7 @@ class AsyncConnection final : public WsConnection,
           handlers_(std::move(handlers)),
           options_(options) {}
 
-    void start() {
+    void start() override {
         beast::get_lowest_layer(ws_).expires_after(options_.connect_timeout);
         resolver_.async_resolve(url_.host, url_.port,
                                 beast::bind_front_handler(&AsyncConnection::on_resolve, self()));
@@ -207,13 +207,10 @@ void WsEventLoop::stop() {
     }
 }
 
-std::shared_ptr<WsConnection> WsEventLoop::connect(const Url& url, WsHandlers handlers,
-                                                   const WsOptions& options) {
+std::shared_ptr<WsConnection> WsEventLoop::connection(const Url& url, WsHandlers handlers,
+                                                      const WsOptions& options) {
     if (url.scheme != "ws") throw NetError("not a ws:// URL: " + url.to_string());
-    auto connection =
-        std::make_shared<AsyncConnection>(impl_->io, url, std::move(handlers), options);
-    connection->start();
-    return connection;
+    return std::make_shared<AsyncConnection>(impl_->io, url, std::move(handlers), options);
 }
 
 std::string http_get(const Url& url, std::chrono::milliseconds timeout) {

@@ -68,6 +68,9 @@ struct WsOptions {
 class WsConnection {
   public:
     virtual ~WsConnection() = default;
+    /// Starts connecting; call once. From here on the handlers may run (on an I/O thread), so
+    /// store the connection where they can see it first.
+    virtual void start() = 0;
     /// Queues a text message; messages sent before the handshake completes wait for it.
     virtual void send_text(std::string text) = 0;
     /// Starts the closing handshake after the queued messages (or abandons a connection still
@@ -91,9 +94,10 @@ class WsEventLoop {
     /// Stops the I/O threads and waits for them: no callback runs once it returns. Idempotent.
     void stop();
 
-    /// Starts connecting to `url` (scheme ws). Failures are reported through `handlers.closed`.
-    std::shared_ptr<WsConnection> connect(const Url& url, WsHandlers handlers,
-                                          const WsOptions& options = {});
+    /// A connection to `url` (scheme ws), not started yet. Failures, once started, are reported
+    /// through `handlers.closed`.
+    std::shared_ptr<WsConnection> connection(const Url& url, WsHandlers handlers,
+                                             const WsOptions& options = {});
 
   private:
     struct Impl;
