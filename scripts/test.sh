@@ -10,6 +10,8 @@ bash scripts/build.sh -DISOMESH_BUILD_TESTS=ON -DISOMESH_BUILD_BENCH=ON
 ctest --test-dir build --output-on-failure -j "$(nproc)" --timeout 600
 # The protocol's Node check: draco3d decodes frames and Ajv validates messages made by the C++ side.
 (cd tests/protocol/node && npm ci --no-audit --no-fund && node --test)
+# The CLI's .glb passes Khronos's gltf-validator and decodes with draco3d to the .ply's triangles.
+(cd tests/export && npm ci --no-audit --no-fund && node --test)
 bash scripts/fuzz.sh
 # The client library (clients/js: varints, frames, slot table, sessions, frames of the C++
 # encoder) and the viewer's pure modules (clients/web/test).
