@@ -10,7 +10,7 @@
 //    isotopic to the surface. An edge may still be crossed twice near a tangency (the sheet pokes
 //    across it); such a poke is removed by an isotopy and changes no topology, which is why the
 //    condition does not demand single crossings. Every sub-cell inherits the condition, so
-//    refining the cell later (to the common depth) keeps the guarantee.
+//    splitting the cell later (to match a finer neighbour, leaf_mesher.h) keeps the guarantee.
 //
 // 2. The thesis's condition, edges crossed at most once, strengthened so that what the corners
 //    cannot see is ruled out too:
@@ -40,7 +40,12 @@
 namespace isomesh {
 
 double CornerCache::value(const glm::u32vec3& p) {
-    const auto [it, inserted] = values_.try_emplace(Lattice::key(p), 0.0);
+    const std::uint64_t key = Lattice::key(p);
+    if (known_ != nullptr) {
+        const auto known = known_->find(key);
+        if (known != known_->end()) return known->second;
+    }
+    const auto [it, inserted] = values_.try_emplace(key, 0.0);
     if (inserted) it->second = evaluator_.value(lattice_.point(p));
     return it->second;
 }

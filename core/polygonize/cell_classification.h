@@ -10,18 +10,22 @@
 
 namespace isomesh {
 
-/// Values of f at lattice points, evaluated on first use. One per worker task (not thread-safe).
+/// Values of f at lattice points, evaluated on first use. One per worker task (not thread-safe);
+/// values already in `known` (read-only, shared between tasks) are not evaluated again.
 class CornerCache {
   public:
-    CornerCache(Evaluator& evaluator, const Lattice& lattice)
-        : evaluator_(evaluator), lattice_(lattice) {}
+    CornerCache(Evaluator& evaluator, const Lattice& lattice,
+                const std::unordered_map<std::uint64_t, double>* known = nullptr)
+        : evaluator_(evaluator), lattice_(lattice), known_(known) {}
 
     double value(const glm::u32vec3& p);
-    const std::unordered_map<std::uint64_t, double>& values() const { return values_; }
+    /// The values this cache evaluated (not those of `known`).
+    std::unordered_map<std::uint64_t, double>& values() { return values_; }
 
   private:
     Evaluator& evaluator_;
     const Lattice& lattice_;
+    const std::unordered_map<std::uint64_t, double>* known_;
     std::unordered_map<std::uint64_t, double> values_;
 };
 

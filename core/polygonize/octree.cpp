@@ -1,4 +1,4 @@
-// Octree subdivision to a common depth (see octree.h). Interval pruning of octrees for implicit
+// Octree subdivision (see octree.h). Interval pruning of octrees for implicit
 // surfaces follows Duff ("Interval arithmetic and recursive subdivision for implicit functions
 // and constructive solid geometry", SIGGRAPH 1992) and Snyder (SIGGRAPH 1992); the per-cell tape
 // simplification during the descent follows libfive (Keeter, "Massively parallel rendering of
@@ -8,8 +8,6 @@
 #include <algorithm>
 #include <cassert>
 
-#include "polygonize/cell_classification.h"
-
 namespace isomesh {
 namespace {
 
@@ -17,8 +15,6 @@ namespace {
 constexpr int kSubLatticeBisections = 2;
 /// Subtrees are cut at this depth (or min_depth, if smaller): up to 8^2 = 64 tasks.
 constexpr int kTaskDepth = 2;
-/// Leaves refined to the common depth per task.
-constexpr std::size_t kLeavesPerTask = 16;
 
 bool is_cancelled(const OctreeSettings& settings) {
     return settings.cancel != nullptr && settings.cancel->load(std::memory_order_relaxed);
@@ -54,11 +50,12 @@ bool provably_empty(Evaluator& evaluator, CornerCache& corners, const Lattice& l
 /// Depth-first walk of one subtree, down to the leaves of the classification.
 class ClassificationWalk {
   public:
-    ClassificationWalk(Evaluator& evaluator, const Lattice& lattice, const OctreeSettings& settings)
+    ClassificationWalk(Evaluator& evaluator, const Lattice& lattice, const OctreeSettings& settings,
+                       const std::unordered_map<std::uint64_t, double>* known = nullptr)
         : evaluator_(evaluator),
           lattice_(lattice),
           settings_(settings),
-          corners_(evaluator, lattice) {}
+          corners_(evaluator, lattice, known) {}
 
     void visit(const CellId& cell) {
         if (is_cancelled(settings_)) return;
@@ -88,82 +85,31 @@ class ClassificationWalk {
         }
     }
 
-    const CornerCache& corners() const { return corners_; }
+    CornerCache& corners() { return corners_; }
 
-    std::vector<CellId> leaves;
-    std::size_t unresolved = 0;
-
-  private:
     void descend(const CellId& cell, const Box& box) {
         evaluator_.push(box);
         for (int octant = 0; octant < 8; ++octant) visit(cell.child(octant));
         evaluator_.pop();
     }
 
-    Evaluator& evaluator_;
-    const Lattice& lattice_;
-    const OctreeSettings& settings_;
-    CornerCache corners_;
-};
-
-/// Refines a leaf to `depth`, keeping the sub-cells where f may have a zero.
-class RefinementWalk {
-  public:
-    RefinementWalk(Evaluator& evaluator, const Lattice& lattice, const OctreeSettings& settings,
-                   int depth, std::vector<CellId>& out)
-        : evaluator_(evaluator),
-          lattice_(lattice),
-          settings_(settings),
-          depth_(depth),
-          out_(out),
-          corners_(evaluator, lattice) {}
-
-    const CornerCache& corners() const { return corners_; }
-
-    /// The leaf itself was examined when it was classified.
-    void refine_leaf(const CellId& leaf) {
-        if (leaf.depth == depth_) {
-            out_.push_back(leaf);
-        } else {
-            descend(leaf);
-        }
-    }
+    std::vector<CellId> leaves;
+    std::size_t unresolved = 0;
 
   private:
-    void visit(const CellId& cell) {
-        if (is_cancelled(settings_)) return;
-        const IntervalGradient enclosure = evaluator_.interval_gradient(lattice_.cell_box(cell));
-        if (provably_empty(evaluator_, corners_, lattice_, cell, enclosure)) return;
-        if (cell.depth == depth_) {
-            out_.push_back(cell);
-        } else {
-            descend(cell);
-        }
-    }
-
-    void descend(const CellId& cell) {
-        evaluator_.push(lattice_.cell_box(cell));
-        for (int octant = 0; octant < 8; ++octant) visit(cell.child(octant));
-        evaluator_.pop();
-    }
-
     Evaluator& evaluator_;
     const Lattice& lattice_;
     const OctreeSettings& settings_;
-    int depth_;
-    std::vector<CellId>& out_;
     CornerCache corners_;
 };
 
 }  // namespace
 
-SurfaceCells find_surface_cells(WorkerPool& workers, const Lattice& lattice,
-                                const OctreeSettings& settings) {
+OctreeLeaves find_leaves(WorkerPool& workers, const Lattice& lattice,
+                         const OctreeSettings& settings) {
     assert(settings.min_depth >= 0 && settings.min_depth <= settings.max_depth);
     assert(settings.max_depth == lattice.max_depth());
-    SurfaceCells result;
-
-    // Classification, one subtree per task.
+    OctreeLeaves result;
     const std::vector<CellId> roots = cells_at_depth(std::min(kTaskDepth, settings.min_depth));
     std::vector<std::vector<CellId>> subtree_leaves(roots.size());
     std::vector<std::unordered_map<std::uint64_t, double>> subtree_values(roots.size());
@@ -172,37 +118,26 @@ SurfaceCells find_surface_cells(WorkerPool& workers, const Lattice& lattice,
         ClassificationWalk walk(evaluator, lattice, settings);
         walk.visit(roots[i]);
         subtree_leaves[i] = std::move(walk.leaves);
-        subtree_values[i] = walk.corners().values();
+        subtree_values[i] = std::move(walk.corners().values());
         subtree_unresolved[i] = walk.unresolved;
     });
-    std::vector<CellId> leaves;
     for (std::size_t i = 0; i < roots.size(); ++i) {
-        leaves.insert(leaves.end(), subtree_leaves[i].begin(), subtree_leaves[i].end());
+        result.leaves.insert(result.leaves.end(), subtree_leaves[i].begin(),
+                             subtree_leaves[i].end());
         result.known_values.merge(subtree_values[i]);
         result.unresolved += subtree_unresolved[i];
     }
     result.cancelled = is_cancelled(settings);
-    if (result.cancelled || leaves.empty()) return result;
-
-    // Refinement of every leaf to the common depth.
-    result.depth = std::max_element(leaves.begin(), leaves.end(), [](const auto& a, const auto& b) {
-                       return a.depth < b.depth;
-                   })->depth;
-    const std::size_t tasks = (leaves.size() + kLeavesPerTask - 1) / kLeavesPerTask;
-    std::vector<std::vector<CellId>> refined(tasks);
-    std::vector<std::unordered_map<std::uint64_t, double>> refined_values(tasks);
-    workers.for_each(tasks, [&](std::size_t task, CountingEvaluator& evaluator) {
-        RefinementWalk walk(evaluator, lattice, settings, result.depth, refined[task]);
-        const std::size_t end = std::min(leaves.size(), (task + 1) * kLeavesPerTask);
-        for (std::size_t i = task * kLeavesPerTask; i < end; ++i) walk.refine_leaf(leaves[i]);
-        refined_values[task] = walk.corners().values();
-    });
-    for (std::size_t task = 0; task < tasks; ++task) {
-        result.cells.insert(result.cells.end(), refined[task].begin(), refined[task].end());
-        result.known_values.merge(refined_values[task]);
-    }
-    result.cancelled = is_cancelled(settings);
     return result;
+}
+
+OctreeLeaves split_leaf(Evaluator& evaluator, const Lattice& lattice,
+                        const OctreeSettings& settings, const CellId& leaf,
+                        const std::unordered_map<std::uint64_t, double>& known_values) {
+    assert(leaf.depth < lattice.max_depth());
+    ClassificationWalk walk(evaluator, lattice, settings, &known_values);
+    walk.descend(leaf, lattice.cell_box(leaf));
+    return {std::move(walk.leaves), std::move(walk.corners().values()), walk.unresolved, false};
 }
 
 }  // namespace isomesh

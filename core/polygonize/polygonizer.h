@@ -30,14 +30,14 @@ struct PolygonizeSettings {
 struct PolygonizeStats {
     std::size_t evaluations = 0;           ///< point evaluations of f (value, or with gradient)
     std::size_t interval_evaluations = 0;  ///< interval evaluations (with or without gradient)
-    std::size_t cells = 0;                 ///< cells meshed (at the common depth)
+    std::size_t cells = 0;                 ///< octree leaves meshed
     std::size_t unresolved_cells = 0;      ///< octree leaves accepted at max_depth unproven
     std::size_t triangles = 0;
     std::size_t vertices = 0;
     std::size_t collapses = 0;  ///< edge collapses of the thin-triangle cleanup
     std::size_t flips = 0;      ///< edge flips of the thin-triangle cleanup
     double time_ms = 0.0;
-    int depth = 0;  ///< the common depth of the meshed cells
+    int depth = 0;  ///< the depth of the deepest leaf
     bool cancelled = false;
 };
 
@@ -53,7 +53,9 @@ struct PolygonizeResult {
 /// normals, triangles counter-clockwise seen from f > 0, neighbours and base edges filled in, no
 /// zero-area triangle, and every edge shared by two triangles except where the surface leaves the
 /// box (or ends at a pole or at the border of f's domain). Sign changes of f that are not roots
-/// (poles such as 1/x = 0, jumps) produce no surface. Identical for every thread count.
+/// (poles such as 1/x = 0, jumps) produce no surface. Cells are as small as the surface's
+/// topology needs where it needs it (octree.h), and cells of different sizes meet without cracks
+/// (leaf_mesher.h). Identical for every thread count.
 ///
 /// Throws std::invalid_argument for an invalid box or depths; exceptions from the field's
 /// evaluators are passed on.

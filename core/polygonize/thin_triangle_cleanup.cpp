@@ -76,6 +76,10 @@ class Cleanup {
   private:
     const glm::dvec3& p(std::uint32_t v) const { return mesh_.positions[v]; }
 
+    glm::dvec3 vertex_normal_sum(const Triangle& tri) const {
+        return mesh_.normals[tri[0]] + mesh_.normals[tri[1]] + mesh_.normals[tri[2]];
+    }
+
     double length(std::uint32_t a, std::uint32_t b) const { return glm::distance(p(a), p(b)); }
 
     bool is_thin(std::uint32_t t) const {
@@ -169,10 +173,20 @@ class Cleanup {
                 before[i] = p(tri[i]);
                 after[i] = tri[i] == v ? p(u) : p(tri[i]);
             }
-            if (is_degenerate(after[0], after[1], after[2])) return false;
-            const glm::dvec3 n0 = glm::cross(before[1] - before[0], before[2] - before[0]);
+            // A triangle may stay degenerate (several vertices at one point, where the surface
+            // runs through a lattice corner, collapse one after the other) but not become so;
+            // one that was degenerate must come out facing the way the surface's normals do.
+            const bool was_degenerate = is_degenerate(before[0], before[1], before[2]);
+            const bool is_now_degenerate = is_degenerate(after[0], after[1], after[2]);
+            if (is_now_degenerate) {
+                if (!was_degenerate) return false;
+                continue;
+            }
             const glm::dvec3 n1 = glm::cross(after[1] - after[0], after[2] - after[0]);
-            if (!(glm::dot(n0, n1) > 0.0)) return false;
+            const glm::dvec3 reference =
+                was_degenerate ? vertex_normal_sum(tri)
+                               : glm::cross(before[1] - before[0], before[2] - before[0]);
+            if (!(glm::dot(reference, n1) > 0.0)) return false;
         }
         return true;
     }

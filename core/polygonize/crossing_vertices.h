@@ -1,0 +1,41 @@
+// Naming the vertices where the surface crosses lattice edges, so that cells of different sizes
+// sharing part of a lattice line share its vertex.
+//
+// A crossing is named by the step of the finest lattice (max depth) on which f changes sign,
+// found by bisection on lattice points from whichever cell edge contains it. Two cells whose edges
+// overlap on a line with one sign change name its crossing alike, whatever their depths; the root
+// itself is then found once, on that finest step.
+#pragma once
+
+#include <cstdint>
+#include <unordered_map>
+
+#include "polygonize/cell_classification.h"
+#include "polygonize/edge_roots.h"
+#include "polygonize/lattice.h"
+
+namespace isomesh {
+
+/// Lattice::edge_key of the finest-lattice step holding a crossing.
+using CrossingKey = std::uint64_t;
+
+/// A key for the edge of a cell at `depth` from lattice point `lower` along `axis`.
+inline std::uint64_t cell_edge_key(const glm::u32vec3& lower, int axis, int depth) {
+    return Lattice::edge_key(lower, axis) | std::uint64_t(depth) << 53;
+}
+
+/// The finest step of the cell edge (lower, axis, depth) on which f changes sign, by bisection on
+/// the lattice points of the edge (values through `values`). Precondition: the ends of the edge
+/// are on different sides (is_inside).
+CrossingKey locate_crossing(CornerCache& values, const Lattice& lattice, const glm::u32vec3& lower,
+                            int axis, int depth);
+
+/// The finest step `key` as a segment with its end values (which locate_crossing evaluated).
+EdgeSegment crossing_segment(const std::unordered_map<std::uint64_t, double>& values,
+                             const Lattice& lattice, CrossingKey key);
+
+/// The linear interpolation of the crossing on its finest step: a first guess of its position.
+glm::dvec3 approximate_crossing(const std::unordered_map<std::uint64_t, double>& values,
+                                const Lattice& lattice, CrossingKey key);
+
+}  // namespace isomesh

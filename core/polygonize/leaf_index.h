@@ -1,0 +1,31 @@
+// Which octree leaves lie across a face of a leaf: the neighbour queries of crack patching.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <unordered_set>
+#include <vector>
+
+#include "polygonize/lattice.h"
+
+namespace isomesh {
+
+class LeafIndex {
+  public:
+    /// Precondition: the leaves do not overlap.
+    explicit LeafIndex(std::span<const CellId> leaves);
+
+    /// The leaves smaller than `cell` on the other side of its face orthogonal to `axis` (side 0:
+    /// the low face, 1: the high face) that touch the face, in octree order. Empty when the other
+    /// side is one leaf of the same size or a larger leaf, holds no leaf, or is outside the box.
+    std::vector<CellId> finer_across(const CellId& cell, int axis, int side) const;
+
+  private:
+    static std::uint64_t key(const CellId& cell);
+    void collect_touching(const CellId& cell, int axis, int side, std::vector<CellId>& out) const;
+
+    std::unordered_set<std::uint64_t> leaves_;
+    std::unordered_set<std::uint64_t> internal_;  // proper ancestors of leaves
+};
+
+}  // namespace isomesh
