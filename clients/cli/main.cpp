@@ -21,7 +21,7 @@ struct Command {
 
 constexpr Command kCommands[] = {
     {"eval", isomesh::cli::run_eval, "evaluate a function at a point or on a box (JSON)"},
-    {"mesh", isomesh::cli::run_mesh, "mesh a surface to a .ply or .obj file (phase 1)"},
+    {"mesh", isomesh::cli::run_mesh, "mesh a surface to a .glb, .stl, .ply or .obj file"},
 };
 
 int print_usage(std::FILE* to) {

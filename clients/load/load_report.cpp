@@ -31,7 +31,7 @@ std::string format(const char* pattern, auto... values) {
 
 std::string percentiles_line(const char* label, const std::vector<double>& samples) {
     const Percentiles p = percentiles(samples);
-    return format("%-24s %9zu %9.2f %9.2f %9.2f %9.2f\n", label, p.count, p.p50, p.p90, p.p99,
+    return format("%-28s %9zu %9.2f %9.2f %9.2f %9.2f\n", label, p.count, p.p50, p.p90, p.p99,
                   p.max);
 }
 
@@ -70,6 +70,11 @@ ordered_json report_json(const LoadReport& report) {
     out["hold_s"] = o.user.hold_s;
     out["mix"] = mix;
     out["time_to_first_mesh_ms"] = percentiles_json(s.first_mesh_ms);
+    ordered_json by_entry = ordered_json::object();
+    for (const auto& [name, samples] : s.first_mesh_ms_by_entry) {
+        by_entry[name] = percentiles_json(samples);
+    }
+    out["time_to_first_mesh_by_entry_ms"] = by_entry;
     out["frame_latency_ms"] = percentiles_json(s.frame_latency_ms);
     out["update_latency_ms"] = percentiles_json(s.update_latency_ms);
     out["frames"] = {{"decoded", s.frames}, {"keyframes", s.keyframes}, {"deltas", s.deltas}};
@@ -99,25 +104,28 @@ std::string report_table(const LoadReport& report) {
     out += format("isomesh-load: %zu sessions on %s for %.1f s (%.1f s elapsed), %u threads\n",
                   o.sessions, o.url.to_string().c_str(), o.duration_s, report.elapsed_s, o.threads);
     out +=
-        format("%-24s %9s %9s %9s %9s %9s\n", "latency (ms)", "count", "p50", "p90", "p99", "max");
+        format("%-28s %9s %9s %9s %9s %9s\n", "latency (ms)", "count", "p50", "p90", "p99", "max");
     out += percentiles_line("time to first mesh", s.first_mesh_ms);
+    for (const auto& [name, samples] : s.first_mesh_ms_by_entry) {
+        out += percentiles_line(("  " + name).c_str(), samples);
+    }
     out += percentiles_line("frame latency", s.frame_latency_ms);
     out += percentiles_line("update to frame", s.update_latency_ms);
-    out += format("frames decoded           %9llu (%llu keyframes, %llu deltas)\n",
+    out += format("%-28s %9llu (%llu keyframes, %llu deltas)\n", "frames decoded",
                   static_cast<unsigned long long>(s.frames),
                   static_cast<unsigned long long>(s.keyframes),
                   static_cast<unsigned long long>(s.deltas));
-    out += format("triangles received       %9llu (%.0f per s)\n",
+    out += format("%-28s %9llu (%.0f per s)\n", "triangles received",
                   static_cast<unsigned long long>(s.triangles_received),
                   per_second(s.triangles_received, report.elapsed_s));
-    out += format("bytes received           %9llu (%.0f per s)\n",
+    out += format("%-28s %9llu (%.0f per s)\n", "bytes received",
                   static_cast<unsigned long long>(s.bytes_received),
                   per_second(s.bytes_received, report.elapsed_s));
-    out += format("sessions created         %9llu (%llu converged, %llu updates sent)\n",
+    out += format("%-28s %9llu (%llu converged, %llu updates sent)\n", "sessions created",
                   static_cast<unsigned long long>(s.sessions_created),
                   static_cast<unsigned long long>(s.converged),
                   static_cast<unsigned long long>(s.updates_sent));
-    out += format("errors                   %9llu (decode %llu, connection %llu, resyncs %llu)\n",
+    out += format("%-28s %9llu (decode %llu, connection %llu, resyncs %llu)\n", "errors",
                   static_cast<unsigned long long>(s.error_count()),
                   static_cast<unsigned long long>(s.decode_errors),
                   static_cast<unsigned long long>(s.connection_errors),

@@ -44,6 +44,9 @@ std::uint64_t LoadStats::error_count() const {
 
 void LoadStats::merge(const LoadStats& other) {
     append(first_mesh_ms, other.first_mesh_ms);
+    for (const auto& [name, samples] : other.first_mesh_ms_by_entry) {
+        append(first_mesh_ms_by_entry[name], samples);
+    }
     append(frame_latency_ms, other.frame_latency_ms);
     append(update_latency_ms, other.update_latency_ms);
     frames += other.frames;

@@ -25,6 +25,9 @@ Percentiles percentiles(std::vector<double> samples);
 struct LoadStats {
     /// From sending `create` to the first keyframe of that session decoded and applied.
     std::vector<double> first_mesh_ms;
+    /// The same samples by mix entry name: a heavy surface's phase 1 alone may take longer than
+    /// a light one under load.
+    std::map<std::string, std::vector<double>> first_mesh_ms_by_entry;
     /// Frame arrival (decoded) minus the frame's server timestamp, same machine, same clock.
     std::vector<double> frame_latency_ms;
     /// From sending an `update` to the first frame of that function version or a later one.

@@ -148,7 +148,9 @@ void VirtualUser::on_frame(const net::WsMessage& message) {
 
 void VirtualUser::on_first_mesh() {
     have_first_mesh_ = true;
-    stats_.first_mesh_ms.push_back(ms_since(create_sent_));
+    const double ms = ms_since(create_sent_);
+    stats_.first_mesh_ms.push_back(ms);
+    stats_.first_mesh_ms_by_entry[entry().name].push_back(ms);
     if (const auto& slider = entry().slider; slider && settings_.updates_per_s > 0) {
         slider_value_ = entry().create.parameters.at(slider->parameter);
         slider_step_ = kSliderStep * (slider->max - slider->min);
