@@ -1,8 +1,10 @@
 // `isomesh mesh`: phase 1 polygonization of a function (or a sampled .iso grid) to a glTF (.glb),
 // STL, PLY or OBJ file, with optional statistics as one JSON line.
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,7 +36,8 @@ every vertex on the surface, and writes it to FILE:
   --param a=1.5       the value of parameter a (repeat for each parameter)
   --box ...           the meshing box (default -5,5,-5,5,-5,5; a grid's own box for .iso)
   --depth MIN,MAX     octree depths: every cell down to MIN is examined, cells are split
-                      where needed down to MAX (default 4,9; 0 <= MIN <= MAX <= 16)
+                      where needed down to MAX (default 4,9; 0 <= MIN <= MAX <= 16; for
+                      .iso the depth whose cells are the grid's cells)
   --threads N         worker threads (default 0: all cores); the mesh does not depend on it
   --stats             print one JSON line: triangles, vertices, evaluations, time_ms, ...
                       (with refinement also first_mesh_ms, total_ms, error_total,
@@ -80,9 +83,21 @@ bool names_iso_file(std::string_view source) {
     return ext == ".iso";
 }
 
-/// The field of `source`; prints the problem and returns null on failure.
+/// The octree depth whose cells are the grid's cells (or smaller, when a sample count less one
+/// is not a power of two): MC33 on them has the interpolant's topology. The grid field's interval
+/// bounds do not shrink inside a grid cell, so deeper cells would all be split to max depth.
+int grid_depth(const IsoGrid& grid) {
+    const int cells = std::max({grid.nx, grid.ny, grid.nz}) - 1;
+    int depth = 0;
+    while ((1 << depth) < cells && depth < 16) ++depth;
+    return depth;
+}
+
+/// The field of `source`; prints the problem and returns null on failure. For a sampled grid,
+/// `depth` is set to grid_depth.
 std::shared_ptr<const Field> load_field(std::string_view source,
-                                        std::span<const std::string_view> params) {
+                                        std::span<const std::string_view> params,
+                                        std::optional<int>& depth) {
     if (!names_iso_file(source)) {
         std::optional<FunctionInput> function = load_function(source, params);
         return function ? function->field : nullptr;
@@ -94,6 +109,7 @@ std::shared_ptr<const Field> load_field(std::string_view source,
         print_error(error);
         return nullptr;
     }
+    depth = grid_depth(*grid);
     return make_grid_field(std::move(*grid));
 }
 
@@ -154,8 +170,13 @@ int run_mesh(std::span<const std::string_view> raw_args) {
             "--server meshes functions with the server's depths and threads: "
             "no --depth, --threads or .iso grid");
     }
-    const std::shared_ptr<const Field> field = load_field(source, args.values("param"));
+    std::optional<int> depth_of_grid;
+    const std::shared_ptr<const Field> field =
+        load_field(source, args.values("param"), depth_of_grid);
     if (!field) return 1;
+    if (depth_of_grid && !args.has("depth")) {
+        settings.min_depth = settings.max_depth = *depth_of_grid;
+    }
     if (args.has("box")) {
         settings.box = parse_mesh_box(*args.value("box"));
     } else if (names_iso_file(source)) {
