@@ -177,8 +177,9 @@ std::optional<LogLevel> log_level_from_string(std::string_view name) {
 }
 
 ConfigResult parse_config(std::span<const std::string_view> args,
-                          const std::function<const char*(const char*)>& getenv) {
-    ServerConfig config;
+                          const std::function<const char*(const char*)>& getenv,
+                          const ServerConfig& defaults) {
+    ServerConfig config = defaults;
     for (const Option& option : options()) {
         const std::string variable = env_name(option.name);
         if (const char* value = getenv(variable.c_str())) {
@@ -215,8 +216,7 @@ ConfigResult parse_config(std::span<const std::string_view> args,
     return config;
 }
 
-std::string config_usage() {
-    const ServerConfig defaults;
+std::string config_usage(const ServerConfig& defaults) {
     std::string text =
         "usage: isomesh-server [--OPTION VALUE]...\n\n"
         "Serves isosurface meshing sessions over WebSocket at /ws, the browser client at /,\n"

@@ -57,12 +57,14 @@ struct ConfigError {
 using ConfigResult = std::variant<ServerConfig, HelpRequested, ConfigError>;
 
 /// Reads `args` (without the program name) as `--name value` or `--name=value`, with `getenv`
-/// consulted for every option not given on the command line. Never throws on bad input.
+/// consulted for every option not given on the command line, over `defaults`. Never throws on bad
+/// input.
 ConfigResult parse_config(std::span<const std::string_view> args,
-                          const std::function<const char*(const char*)>& getenv);
+                          const std::function<const char*(const char*)>& getenv,
+                          const ServerConfig& defaults = {});
 
 /// The --help text: every option, its environment variable and its default.
-std::string config_usage();
+std::string config_usage(const ServerConfig& defaults = {});
 
 /// The worker thread count: config.worker_threads, or the number of cores when 0.
 unsigned resolved_worker_threads(const ServerConfig& config);

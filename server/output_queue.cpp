@@ -14,13 +14,13 @@ OutputQueue::~OutputQueue() {
 void OutputQueue::expect_keyframe(const protocol::SessionId& session) {
     Lock lock(mutex_);
     if (closed_) return;
-    drop_frames(lock, session);
+    drop_frames(lock, session, true);
     streams_[session] = StreamState::awaiting;
 }
 
 void OutputQueue::forget(const protocol::SessionId& session, bool drop_queued) {
     Lock lock(mutex_);
-    if (drop_queued) drop_frames(lock, session);
+    if (drop_queued) drop_frames(lock, session, true);
     streams_.erase(session);
 }
 
@@ -29,7 +29,7 @@ bool OutputQueue::push_keyframe(const protocol::SessionId& session,
     Lock lock(mutex_);
     auto stream = streams_.find(session);
     if (closed_ || stream == streams_.end()) return false;
-    drop_frames(lock, session);
+    drop_frames(lock, session, true);
     stream->second = StreamState::live;
     enqueue(lock, {Outgoing::Kind::keyframe, nullptr, std::move(frame), session, created});
     const bool wake = claim_writer(lock);
@@ -53,9 +53,15 @@ OutputQueue::DeltaOutcome OutputQueue::push_delta(const protocol::SessionId& ses
     // An empty queue always takes one frame, however large: otherwise no write would ever
     // complete to bring the stream back.
     if (queued_bytes_ > 0 && queued_bytes_ + frame->size() > budget_) {
-        drop_frames(lock, session);
-        stream->second = StreamState::stalled;
+        // The session's queued deltas go; a queued keyframe stays (it is consistent, and its
+        // write will report the stall).
+        drop_frames(lock, session, false);
         if (metrics_) metrics_->deltas_dropped.add();
+        if (queue_.empty() && in_flight_bytes_ == 0) {
+            stream->second = StreamState::awaiting;
+            return DeltaOutcome::dropped_resync;
+        }
+        stream->second = StreamState::stalled;
         return DeltaOutcome::dropped_stalled;
     }
     enqueue(lock, {Outgoing::Kind::delta, nullptr, std::move(frame), session, created});
@@ -151,9 +157,11 @@ void OutputQueue::enqueue(const Lock&, Outgoing message) {
     queue_.push_back(std::move(message));
 }
 
-void OutputQueue::drop_frames(const Lock&, const protocol::SessionId& session) {
+void OutputQueue::drop_frames(const Lock&, const protocol::SessionId& session, bool keyframes_too) {
     auto dropped = std::stable_partition(queue_.begin(), queue_.end(), [&](const Outgoing& m) {
-        return !(m.binary() && m.session == session);
+        const bool droppable = m.kind == Outgoing::Kind::delta ||
+                               (keyframes_too && m.kind == Outgoing::Kind::keyframe);
+        return !(droppable && m.session == session);
     });
     std::size_t bytes = 0;
     for (auto it = dropped; it != queue_.end(); ++it) {

@@ -6,7 +6,8 @@
 //   live       deltas are queued;
 //   stalled    the budget was exceeded: the session's queued deltas were dropped, later ones are
 //              dropped too, and once the queue has drained below a quarter of the budget the
-//              writer asks the session for a fresh keyframe (state awaiting);
+//              writer asks the session for a fresh keyframe (state awaiting; when nothing is left
+//              to write, push_delta says so and the session sends the keyframe at once);
 //   awaiting   a keyframe was asked for (subscription, resync, or stall): deltas are dropped until
 //              it comes, which makes the stream live again.
 // So a slow reader never makes the server buffer more than the budget plus one keyframe per
@@ -49,7 +50,15 @@ struct Outgoing {
 class OutputQueue {
   public:
     enum class StreamState { live, stalled, awaiting };
-    enum class DeltaOutcome { queued, dropped_awaiting, dropped_stalled, dropped_unknown };
+    enum class DeltaOutcome {
+        queued,
+        dropped_awaiting,
+        dropped_stalled,
+        /// Dropped, and nothing is left to write that would report the stall later: the
+        /// producer must send this connection a keyframe now (the stream is awaiting it).
+        dropped_resync,
+        dropped_unknown,
+    };
 
     /// `wakeup` is called (outside the lock) when a message is pushed while the writer is idle:
     /// the writer must then call next() until it returns nothing. `metrics` may be null.
@@ -94,8 +103,9 @@ class OutputQueue {
     /// Marks the writer busy and returns true when it was idle (the caller then wakes it).
     bool claim_writer(const Lock&);
     void enqueue(const Lock&, Outgoing message);
-    /// Removes queued (not in-flight) frames of `session`; counts dropped deltas.
-    void drop_frames(const Lock&, const protocol::SessionId& session);
+    /// Removes queued (not in-flight) deltas of `session`, and its keyframes if `keyframes_too`;
+    /// counts dropped deltas.
+    void drop_frames(const Lock&, const protocol::SessionId& session, bool keyframes_too);
     void notify(bool wake);
 
     const std::size_t budget_;

@@ -248,6 +248,7 @@ MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& in
 MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) {
     PolygonizeSettings phase1;
     phase1.box = version.box;
+    phase1.min_depth = services_.settings.phase1_min_depth;
     phase1.threads = 1;  // sessions run in parallel on the pool; the output is the same
     phase1.cancel = &cancel_;
     PolygonizeResult first;
@@ -313,7 +314,10 @@ bool MeshSession::refine_turn(const Inbox& inbox) {
         return false;
     }
     gather(pending_, step.delta);
-    pending_changes_ += step.delta.added_triangles.size() + step.delta.removed_triangles.size();
+    const MeshDelta& d = step.delta;
+    pending_changes_ += d.added_triangles.size() + d.removed_triangles.size() +
+                        d.added_vertices.size() + d.moved_vertices.size() +
+                        d.removed_vertices.size();
     services_.metrics.splits.add(step.splits);
     services_.metrics.merges.add(step.merges);
     splits_since_progress_ += step.splits;
@@ -366,7 +370,6 @@ void MeshSession::flush(const Inbox& inbox, bool converged) {
     info.function_version = current_.state.version;
     protocol::DeltaContent frame_content;
     frame_content.removed = content.removed;
-    frame_content.moved = content.moved;
     frame_content.vertices = content.vertices;
     frame_content.triangles = content.triangles;
     frame_content.base_triangle_id = wire_.next_wire_id();
@@ -374,8 +377,11 @@ void MeshSession::flush(const Inbox& inbox, bool converged) {
     if (!encoded) throw std::runtime_error("delta encoding failed: " + encoded.error().message);
     wire_.commit_wire_ids(content.refiner_ids, encoded.value().triangle_ids);
     auto frame = std::make_shared<const Bytes>(std::move(encoded.value().bytes));
-    for (const auto& client : inbox.subscribers)
-        client->queue().push_delta(id_, frame, last_flush_);
+    for (const auto& client : inbox.subscribers) {
+        if (client->queue().push_delta(id_, frame, last_flush_) ==
+            OutputQueue::DeltaOutcome::dropped_resync)
+            request_keyframe(client, true);
+    }
 }
 
 std::shared_ptr<const Bytes> MeshSession::encode_keyframe(std::uint16_t flags,

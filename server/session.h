@@ -40,10 +40,14 @@ namespace isomesh::server {
 struct SessionSettings {
     Clock::duration slice = std::chrono::microseconds(2000);
     Clock::duration batch_interval = std::chrono::milliseconds(20);
-    std::size_t batch_triangles = 2000;  ///< triangles added or removed that trigger a delta
+    std::size_t batch_triangles = 2000;  ///< changes (triangles, vertices) that trigger a delta
     Clock::duration eval_timeout = std::chrono::seconds(10);
     Clock::duration progress_interval = std::chrono::milliseconds(250);
     int position_bits = 14;
+    /// Phase 1 before refinement starts coarser than phase 1 alone, as `isomesh mesh --triangles`
+    /// does (clients/cli/refine_options.h, kRefineMinDepth): refinement spends triangles better
+    /// than a uniform octree level. Server and CLI must agree for their meshes to match.
+    int phase1_min_depth = 3;
 };
 
 struct SessionServices {
@@ -155,7 +159,7 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     protocol::MeshEncoding encoding_;
     WireMesh wire_;
     DeltaBuilder pending_;
-    std::size_t pending_changes_ = 0;
+    std::size_t pending_changes_ = 0;  // triangles and vertices changed in pending_
     std::uint64_t sequence_ = 0;
     bool converged_ = false;
     Clock::time_point last_flush_{};

@@ -40,24 +40,44 @@ WireDelta WireMesh::apply(const MeshDelta& delta) {
         content.removed.push_back(it->second.wire_id);
         triangles_.erase(it);
     }
-    std::sort(content.removed.begin(), content.removed.end());
     for (std::uint32_t id : delta.removed_vertices) vertices_.erase(id);
     for (const DeltaVertex& v : delta.added_vertices)
         vertices_[v.id] = wire_vertex(v.id, v.position, v.normal);
-    for (const DeltaVertex& v : delta.moved_vertices)
-        vertices_[v.id] = wire_vertex(v.id, v.position, v.normal);
 
-    std::unordered_set<std::uint32_t> used;
+    auto add = [&](std::uint32_t id, const std::array<std::uint32_t, 3>& corners) {
+        content.triangles.push_back({corners});
+        content.refiner_ids.push_back(id);
+    };
     for (const DeltaTriangle& t : delta.added_triangles) {
         triangles_[t.id] = {t.vertices, kUnassigned};
-        content.triangles.push_back({t.vertices});
-        content.refiner_ids.push_back(t.id);
+        add(t.id, t.vertices);
+    }
+    if (!delta.moved_vertices.empty()) {
+        std::unordered_set<std::uint32_t> moved;
+        for (const DeltaVertex& v : delta.moved_vertices) {
+            vertices_[v.id] = wire_vertex(v.id, v.position, v.normal);
+            moved.insert(v.id);
+        }
+        std::vector<std::uint32_t> resent;  // live triangles around a moved vertex, sent before
+        for (auto& [id, triangle] : triangles_) {
+            const auto& c = triangle.vertices;
+            if (triangle.wire_id == kUnassigned) continue;  // added by this delta
+            if (moved.contains(c[0]) || moved.contains(c[1]) || moved.contains(c[2])) {
+                content.removed.push_back(triangle.wire_id);
+                triangle.wire_id = kUnassigned;
+                resent.push_back(id);
+            }
+        }
+        std::sort(resent.begin(), resent.end());
+        for (std::uint32_t id : resent) add(id, triangles_.at(id).vertices);
+    }
+    std::sort(content.removed.begin(), content.removed.end());
+
+    std::unordered_set<std::uint32_t> used;
+    for (const protocol::Triangle& t : content.triangles) {
         for (std::uint32_t v : t.vertices) {
             if (used.insert(v).second) content.vertices.push_back(vertices_.at(v));
         }
-    }
-    for (const DeltaVertex& v : delta.moved_vertices) {
-        if (!used.contains(v.id)) content.moved.push_back(vertices_.at(v.id));
     }
     return content;
 }

@@ -2,7 +2,9 @@
 //
 // The refiner numbers triangles with ids of its own (a merge brings a triangle back under its old
 // id); on the wire a delta's added triangles get fresh ids, base + decoded index (PROTOCOL.md), so
-// this mirror maps each live refiner triangle to its wire id.
+// this mirror maps each live refiner triangle to its wire id. A vertex that moved (a new function
+// version) is re-sent as PROTOCOL.md says: the delta removes every live triangle around it and
+// adds it again (under a new wire id), the payload carrying the vertex's new values.
 #pragma once
 
 #include <array>
@@ -19,15 +21,11 @@ namespace isomesh::server {
 
 /// The contents of one delta frame, before encoding.
 struct WireDelta {
-    std::vector<std::uint64_t> removed;  ///< wire ids, ascending
-    /// Vertices that moved (after a function change) and are used by no added triangle: a client
-    /// still holds them after the removals. Moved vertices that added triangles use travel with
-    /// them in `vertices`, with their new values.
-    std::vector<protocol::Vertex> moved;
+    std::vector<std::uint64_t> removed;         ///< wire ids, ascending
     std::vector<protocol::Vertex> vertices;     ///< every vertex the added triangles use
     std::vector<protocol::Triangle> triangles;  ///< added
     std::vector<std::uint32_t> refiner_ids;     ///< refiner id of each added triangle
-    bool empty() const { return removed.empty() && moved.empty() && triangles.empty(); }
+    bool empty() const { return removed.empty() && triangles.empty(); }
 };
 
 /// The contents of a keyframe: the whole mesh, triangles in ascending wire id order.

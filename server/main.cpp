@@ -1,0 +1,74 @@
+// isomesh-server: the mesh server. `isomesh-server --help` lists the options.
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <string_view>
+#include <vector>
+
+#include "server/config.h"
+#include "server/log.h"
+#include "server/mesh_service.h"
+#include "server/metrics.h"
+#include "server/net/http_server.h"
+
+namespace {
+
+using namespace isomesh::server;
+
+/// The URL a person can open: the bound address, or the loopback one for a wildcard bind.
+std::string browser_url(const ServerConfig& config, std::uint16_t port) {
+    std::string host = config.bind_address;
+    if (host == "0.0.0.0" || host == "::") host = "127.0.0.1";
+    if (host.find(':') != std::string::npos) host = "[" + host + "]";
+    return "http://" + host + ":" + std::to_string(port) + "/";
+}
+
+int serve(const ServerConfig& config) {
+    Logger logger(config.log_level);
+    Metrics metrics;
+    MeshService service(config, logger, metrics);
+    net::HttpServer server(service, config, logger, metrics);
+    std::uint16_t port = 0;
+    try {
+        port = server.listen();
+    } catch (const std::exception& e) {
+        logger.error(
+            "listen_failed",
+            {{"address", config.bind_address}, {"port", config.port}, {"message", e.what()}});
+        return 1;
+    }
+    logger.info("listening", {{"address", config.bind_address},
+                              {"port", port},
+                              {"url", browser_url(config, port)},
+                              {"websocket", "/ws"},
+                              {"web_root", config.web_root},
+                              {"worker_threads", resolved_worker_threads(config)}});
+    server.run();
+    logger.info("stopped");
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    ServerConfig defaults;
+    defaults.web_root = ISOMESH_DEFAULT_WEB_ROOT;
+    const std::vector<std::string_view> args(argv + 1, argv + argc);
+    const ConfigResult parsed = parse_config(
+        args, [](const char* name) { return std::getenv(name); }, defaults);
+    if (std::holds_alternative<HelpRequested>(parsed)) {
+        std::fputs(config_usage(defaults).c_str(), stdout);
+        return 0;
+    }
+    if (const auto* error = std::get_if<ConfigError>(&parsed)) {
+        std::fprintf(stderr, "isomesh-server: %s\nrun 'isomesh-server --help' for usage\n",
+                     error->message.c_str());
+        return 2;
+    }
+    try {
+        return serve(std::get<ServerConfig>(parsed));
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "isomesh-server: internal error: %s\n", e.what());
+        return 1;
+    }
+}

@@ -1,0 +1,95 @@
+#include "test_connection.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <thread>
+
+namespace isomesh::server::testing {
+
+TestConnection::TestConnection(MeshService& service) : service_(service) {
+    client = service.connect({});
+}
+
+TestConnection::~TestConnection() {
+    disconnect();
+}
+
+void TestConnection::send(std::string_view text) {
+    service_.receive(client, text);
+}
+
+void TestConnection::send(const protocol::ClientMessage& message) {
+    send(protocol::serialize(message));
+}
+
+void TestConnection::pump() {
+    if (!reading) return;
+    while (auto message = client->queue().next()) {
+        receive(*message);
+        const auto stalled = client->queue().written();
+        if (!stalled.empty()) service_.catch_up(client, stalled);
+    }
+}
+
+bool TestConnection::wait_for(const std::function<bool()>& done, double seconds) {
+    const auto end = Clock::now() + std::chrono::duration<double>(seconds);
+    for (;;) {
+        pump();
+        if (done()) return true;
+        if (Clock::now() > end) return false;
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+}
+
+void TestConnection::disconnect() {
+    if (client) service_.disconnect(client);
+}
+
+const protocol::Converged* TestConnection::converged(const protocol::SessionId& session,
+                                                     std::uint32_t version) const {
+    for (const auto& message : messages) {
+        const auto* c = std::get_if<protocol::Converged>(&message);
+        if (c && c->session == session && c->version == version) return c;
+    }
+    return nullptr;
+}
+
+void TestConnection::receive(const Outgoing& message) {
+    bytes_received += message.size();
+    if (!message.binary()) {
+        auto parsed = protocol::parse_server_message(*message.text);
+        ASSERT_TRUE(parsed.ok()) << *message.text;
+        messages.push_back(parsed.value());
+        return;
+    }
+    auto decoded = protocol::decode_frame(*message.frame);
+    ASSERT_TRUE(decoded.ok()) << decoded.error().message;
+    frames.push_back(decoded.value().header);
+    outcomes.push_back(replicas[decoded.value().header.session].apply(decoded.value()));
+}
+
+std::vector<std::array<std::uint32_t, 3>> canonical_triangles(const protocol::MeshReplica& mesh) {
+    std::vector<std::array<std::uint32_t, 3>> out;
+    for (const auto& [id, v] : mesh.triangles()) {
+        const auto first = std::min_element(v.begin(), v.end()) - v.begin();
+        out.push_back({v[first], v[(first + 1) % 3], v[(first + 2) % 3]});
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+bool watertight(const protocol::MeshReplica& mesh) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+    for (const auto& [id, v] : mesh.triangles()) {
+        for (int e = 0; e < 3; ++e) ++directed[{v[e], v[(e + 1) % 3]}];
+    }
+    for (const auto& [edge, uses] : directed) {
+        if (uses != 1) return false;
+        auto opposite = directed.find({edge.second, edge.first});
+        if (opposite == directed.end() || opposite->second != 1) return false;
+    }
+    return !directed.empty();
+}
+
+}  // namespace isomesh::server::testing

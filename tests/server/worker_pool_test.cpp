@@ -1,0 +1,139 @@
+#include "server/worker_pool.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace isomesh::server {
+namespace {
+
+using namespace std::chrono_literals;
+
+/// A task that wants `turns` turns, each spending `turn_time`, and records when it ran.
+class CountingTask : public Task {
+  public:
+    CountingTask(int turns, Clock::duration turn_time, std::vector<char>* log, char name,
+                 std::mutex* log_mutex)
+        : turns_left(turns), turn_time_(turn_time), log_(log), name_(name), log_mutex_(log_mutex) {}
+
+    bool run_slice() override {
+        const int concurrent = running_.fetch_add(1) + 1;
+        max_concurrent = std::max(max_concurrent.load(), concurrent);
+        const auto end = Clock::now() + turn_time_;
+        while (Clock::now() < end) {
+        }
+        if (log_) {
+            std::lock_guard lock(*log_mutex_);
+            log_->push_back(name_);
+        }
+        ++turns_run;
+        running_.fetch_sub(1);
+        return --turns_left > 0;
+    }
+
+    std::atomic<int> turns_left;
+    std::atomic<int> turns_run{0};
+    std::atomic<int> max_concurrent{0};
+
+  private:
+    std::atomic<int> running_{0};
+    Clock::duration turn_time_;
+    std::vector<char>* log_;
+    char name_;
+    std::mutex* log_mutex_;
+};
+
+bool wait_for(const std::function<bool()>& done, Clock::duration limit = 10s) {
+    const auto end = Clock::now() + limit;
+    while (!done()) {
+        if (Clock::now() > end) return false;
+        std::this_thread::sleep_for(1ms);
+    }
+    return true;
+}
+
+TEST(WorkerPool, light_task_is_not_starved_by_a_heavy_one) {
+    std::vector<char> log;
+    std::mutex log_mutex;
+    WorkerPool pool(1);
+    auto heavy = std::make_shared<CountingTask>(1000, 1ms, &log, 'H', &log_mutex);
+    auto light = std::make_shared<CountingTask>(3, 1ms, &log, 'L', &log_mutex);
+    pool.schedule(heavy);
+    std::this_thread::sleep_for(5ms);
+    pool.schedule(light);
+    ASSERT_TRUE(wait_for([&] { return light->turns_left == 0; }));
+    pool.stop();
+    // Round-robin: between two turns of the light task the heavy one gets exactly one.
+    std::vector<std::size_t> light_turns;
+    for (std::size_t i = 0; i < log.size(); ++i)
+        if (log[i] == 'L') light_turns.push_back(i);
+    ASSERT_EQ(light_turns.size(), 3u);
+    EXPECT_EQ(light_turns[1] - light_turns[0], 2u);
+    EXPECT_EQ(light_turns[2] - light_turns[1], 2u);
+    EXPECT_GT(heavy->turns_left, 0);  // the heavy task was still going
+}
+
+TEST(WorkerPool, task_never_runs_on_two_threads_and_reruns_when_scheduled_while_running) {
+    WorkerPool pool(4);
+    auto task = std::make_shared<CountingTask>(1, 20ms, nullptr, 'T', nullptr);
+    pool.schedule(task);
+    ASSERT_TRUE(wait_for([&] { return task->max_concurrent.load() == 1; }));
+    task->turns_left = 1;  // wants one turn more only if scheduled again
+    for (int i = 0; i < 50; ++i) pool.schedule(task);
+    ASSERT_TRUE(pool.wait_idle(Clock::now() + 10s));
+    EXPECT_EQ(task->max_concurrent.load(), 1);
+    EXPECT_EQ(task->turns_run.load(), 2);  // the schedules while it ran collapse into one turn
+}
+
+TEST(WorkerPool, stop_drops_queued_work_and_joins) {
+    auto pool = std::make_unique<WorkerPool>(2);
+    std::vector<std::shared_ptr<CountingTask>> tasks;
+    for (int i = 0; i < 8; ++i) {
+        tasks.push_back(std::make_shared<CountingTask>(1'000'000, 1ms, nullptr, 'x', nullptr));
+        pool->schedule(tasks.back());
+    }
+    std::this_thread::sleep_for(20ms);
+    const auto start = Clock::now();
+    pool->stop();
+    EXPECT_LT(Clock::now() - start, 1s);
+    std::vector<int> runs;
+    for (auto& t : tasks) runs.push_back(t->turns_run);
+    std::this_thread::sleep_for(10ms);
+    for (std::size_t i = 0; i < tasks.size(); ++i) EXPECT_EQ(tasks[i]->turns_run, runs[i]);
+    pool->schedule(tasks[0]);  // ignored after stop
+    EXPECT_EQ(pool->queued(), 0u);
+}
+
+TEST(WorkerPool, exceptions_are_reported_and_the_pool_keeps_working) {
+    struct Throwing : Task {
+        bool run_slice() override { throw std::runtime_error("boom"); }
+    };
+    std::atomic<int> errors{0};
+    WorkerPool pool(1, nullptr, [&](std::exception_ptr) { ++errors; });
+    pool.schedule(std::make_shared<Throwing>());
+    auto task = std::make_shared<CountingTask>(2, 0ms, nullptr, 'T', nullptr);
+    pool.schedule(task);
+    ASSERT_TRUE(pool.wait_idle(Clock::now() + 10s));
+    EXPECT_EQ(errors.load(), 1);
+    EXPECT_EQ(task->turns_run.load(), 2);
+}
+
+TEST(WorkerPool, metrics_count_queue_and_busy_workers) {
+    Metrics metrics;
+    {
+        WorkerPool pool(2, &metrics);
+        EXPECT_EQ(metrics.worker_threads.value(), 2);
+        auto task = std::make_shared<CountingTask>(5, 1ms, nullptr, 'T', nullptr);
+        pool.schedule(task);
+        ASSERT_TRUE(pool.wait_idle(Clock::now() + 10s));
+    }
+    EXPECT_EQ(metrics.run_queue.value(), 0);
+    EXPECT_EQ(metrics.busy_workers.value(), 0);
+}
+
+}  // namespace
+}  // namespace isomesh::server
