@@ -75,6 +75,16 @@ int face_of_triangle(const std::array<std::uint8_t, 3>& ids) {
     return f >= 0 && common_face(ids[1], ids[2]) == f && common_face(ids[2], ids[0]) == f ? f : -1;
 }
 
+/// Whether the corners of face (axis, side) of `cell` are not all on one side.
+bool face_is_crossed(const LeafMeshingInput& input, const CellId& cell, int axis, int side) {
+    int inside = 0;
+    for (int c = 0; c < 8; ++c) {
+        if (((c >> axis) & 1) != side) continue;
+        inside += is_inside(input.values.at(Lattice::key(input.lattice.corner(cell, c))));
+    }
+    return inside != 0 && inside != 4;
+}
+
 /// The marching squares segments of the finer leaves covering one face of a leaf, as a graph
 /// between crossings, with the paths along it.
 class FaceGraph {
@@ -330,6 +340,19 @@ class LeafMesher {
 };
 
 }  // namespace
+
+bool needs_grading(const LeafMeshingInput& input, const CellId& leaf) {
+    for (int axis = 0; axis < 3; ++axis) {
+        for (int side = 0; side < 2; ++side) {
+            for (const CellId& cell : input.index.finer_across(leaf, axis, side)) {
+                if (cell.depth > leaf.depth + 1 && face_is_crossed(input, cell, axis, 1 - side)) {
+                    return true;
+                }
+            }
+        }
+    }
+    return false;
+}
 
 void mesh_leaf(Evaluator& evaluator, const LeafMeshingInput& input, const CellId& leaf,
                LeafMeshes& out) {

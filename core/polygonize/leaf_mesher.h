@@ -58,6 +58,11 @@ struct LeafMeshingInput {
 void mesh_leaf(Evaluator& evaluator, const LeafMeshingInput& input, const CellId& leaf,
                LeafMeshes& out);
 
+/// Whether a finer neighbour across some face of `leaf` is more than one level deeper where the
+/// surface crosses that face (a sign change on the neighbour's face): then `leaf` must be split,
+/// so that the octree is graded along the surface (2:1) and each patched polyline is short.
+bool needs_grading(const LeafMeshingInput& input, const CellId& leaf);
+
 /// MC33 needs finite values: a non-finite corner (a pole's, or NaN outside f's domain, which
 /// counts as outside) gets a value of its sign larger than every finite one of the cell.
 std::array<double, 8> finite_values(std::array<double, 8> values);

@@ -6,11 +6,13 @@
 // 3. crossings: each crossed leaf edge is narrowed by bisection to the finest lattice step where
 //    f changes sign (crossing_vertices.h), which names its vertex, so leaves of different sizes
 //    sharing a lattice line share the vertex;
-// 4. Marching Cubes 33 in every leaf (leaf_mesher.h), with crack patching where a neighbour is
-//    finer; leaves whose faces do not match their finer neighbours are split and everything is
-//    meshed again, until all match. The thesis refines every surface cell to one common depth
-//    instead, which is simpler but lets one small feature (a thin neck, a crease) refine the
-//    whole surface: millions of triangles where tens of thousands suffice;
+// 4. the octree is graded along the surface (a leaf is split while a neighbour across a face the
+//    surface crosses is two levels finer), then Marching Cubes 33 runs in every leaf
+//    (leaf_mesher.h), with crack patching where a neighbour is finer; leaves whose faces do not
+//    match their finer neighbours are split and everything is meshed again, until all match. The
+//    thesis refines every surface cell to one common depth instead, which is simpler but lets one
+//    small feature (a thin neck, a crease) refine the whole surface: millions of triangles where
+//    tens of thousands suffice;
 // 5. one root per crossing used, found on its finest step by safeguarded Newton iteration with
 //    the gradient (edge_roots.h); crossings that are poles or jumps are no roots, and the
 //    triangles touching them are dropped;
@@ -163,28 +165,45 @@ void locate_crossings(WorkerPool& workers, const Lattice& lattice,
     for (std::size_t i = 0; i < edges.size(); ++i) crossings.emplace(edges[i].key, located[i]);
 }
 
-/// Replaces each unmatched leaf by the leaves of its subtree (octree order is kept).
-std::vector<CellId> split_unmatched(WorkerPool& workers, const Lattice& lattice,
-                                    const OctreeSettings& settings,
-                                    const std::vector<CellId>& leaves,
-                                    const std::vector<CellId>& unmatched, ValueMap& values,
-                                    std::size_t& unresolved) {
-    std::vector<OctreeLeaves> subtrees(unmatched.size());
-    workers.for_each(unmatched.size(), [&](std::size_t i, CountingEvaluator& evaluator) {
-        subtrees[i] = split_leaf(evaluator, lattice, settings, unmatched[i], values);
+/// Replaces each leaf of `which` (a subsequence of `leaves`) by the leaves of its subtree,
+/// keeping the octree order; the new leaves are appended to `added`.
+std::vector<CellId> split_leaves(WorkerPool& workers, const Lattice& lattice,
+                                 const OctreeSettings& settings, const std::vector<CellId>& leaves,
+                                 const std::vector<CellId>& which, ValueMap& values,
+                                 std::size_t& unresolved, std::vector<CellId>& added) {
+    std::vector<OctreeLeaves> subtrees(which.size());
+    workers.for_each(which.size(), [&](std::size_t i, CountingEvaluator& evaluator) {
+        subtrees[i] = split_leaf(evaluator, lattice, settings, which[i], values);
     });
     std::vector<CellId> result;
-    std::size_t next = 0;  // unmatched is a subsequence of leaves
+    std::size_t next = 0;
     for (const CellId& leaf : leaves) {
-        if (next < unmatched.size() && leaf.coords == unmatched[next].coords &&
-            leaf.depth == unmatched[next].depth) {
+        if (next < which.size() && leaf.coords == which[next].coords &&
+            leaf.depth == which[next].depth) {
             OctreeLeaves& subtree = subtrees[next++];
             result.insert(result.end(), subtree.leaves.begin(), subtree.leaves.end());
+            added.insert(added.end(), subtree.leaves.begin(), subtree.leaves.end());
             values.merge(subtree.known_values);
             unresolved += subtree.unresolved;
         } else {
             result.push_back(leaf);
         }
+    }
+    return result;
+}
+
+/// The leaves for which `predicate` holds, in order (evaluated in parallel).
+template <typename Predicate>
+std::vector<CellId> select(WorkerPool& workers, const std::vector<CellId>& leaves,
+                           const Predicate& predicate) {
+    std::vector<std::uint8_t> chosen(leaves.size());
+    workers.for_each(task_count(leaves.size(), kCellsPerTask), [&](std::size_t task, auto&) {
+        const std::size_t end = std::min(leaves.size(), (task + 1) * kCellsPerTask);
+        for (std::size_t i = task * kCellsPerTask; i < end; ++i) chosen[i] = predicate(leaves[i]);
+    });
+    std::vector<CellId> result;
+    for (std::size_t i = 0; i < leaves.size(); ++i) {
+        if (chosen[i]) result.push_back(leaves[i]);
     }
     return result;
 }
@@ -297,13 +316,30 @@ PolygonizeResult polygonize(const Field& field, const PolygonizeSettings& settin
     ValueMap values = std::move(octree.known_values);
     std::unordered_map<std::uint64_t, CrossingKey> crossings;
     std::vector<LeafMeshes> parts;
-    // Mesh every leaf; split the leaves whose faces do not match their finer neighbours, and
-    // again, until all match (leaves of equal size always do, so this ends).
+    std::vector<CellId> fresh = leaves;      // leaves whose corners are not evaluated yet
+    std::vector<CellId> unlocated = leaves;  // leaves whose crossings are not located yet
+    auto split = [&](const std::vector<CellId>& which) {
+        const std::size_t before = fresh.size();
+        leaves = split_leaves(workers, lattice, octree_settings, leaves, which, values,
+                              stats.unresolved_cells, fresh);
+        unlocated.insert(unlocated.end(), fresh.begin() + before, fresh.end());
+    };
+    // Grade the octree along the surface, then mesh every leaf; split the leaves whose faces do
+    // not match their finer neighbours, and again, until all match (leaves of equal size always
+    // do, so this ends).
     while (!is_cancelled(settings)) {
-        evaluate_corners(workers, lattice, leaves, values);
-        locate_crossings(workers, lattice, leaves, values, crossings);
+        evaluate_corners(workers, lattice, fresh, values);
+        fresh.clear();
         const LeafIndex index(leaves);
         const LeafMeshingInput input{lattice, values, crossings, index};
+        const std::vector<CellId> ungraded =
+            select(workers, leaves, [&](const CellId& leaf) { return needs_grading(input, leaf); });
+        if (!ungraded.empty()) {
+            split(ungraded);
+            continue;
+        }
+        locate_crossings(workers, lattice, unlocated, values, crossings);
+        unlocated.clear();
         parts.assign(task_count(leaves.size(), kCellsPerTask), {});
         workers.for_each(parts.size(), [&](std::size_t task, CountingEvaluator& evaluator) {
             const std::size_t end = std::min(leaves.size(), (task + 1) * kCellsPerTask);
@@ -316,8 +352,7 @@ PolygonizeResult polygonize(const Field& field, const PolygonizeSettings& settin
             unmatched.insert(unmatched.end(), part.unmatched.begin(), part.unmatched.end());
         }
         if (unmatched.empty()) break;
-        leaves = split_unmatched(workers, lattice, octree_settings, leaves, unmatched, values,
-                                 stats.unresolved_cells);
+        split(unmatched);
     }
     stats.cells = leaves.size();
     for (const CellId& leaf : leaves) stats.depth = std::max(stats.depth, leaf.depth);
