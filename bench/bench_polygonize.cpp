@@ -15,7 +15,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <map>
 #include <memory>
 #include <string>
@@ -23,6 +22,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "bench_clock.h"
 #include "eval/tape_field.h"
 #include "expr/compile.h"
 #include "mesh/topology.h"
@@ -32,17 +32,8 @@
 namespace isomesh {
 namespace {
 
-double cpu_seconds() {
-    timespec t{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
-
-double wall_seconds() {
-    timespec t{};
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
+using bench::cpu_seconds;
+using bench::wall_seconds;
 
 struct Surface {
     const char* name;

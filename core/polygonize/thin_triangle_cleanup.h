@@ -40,8 +40,12 @@ struct ThinTriangleReport {
 /// u does not (`box_faces[v]`: bit 2 * axis + side), so the boundary stays on the box, or when a
 /// triangle around v would flip over or become degenerate. A cap (a triangle with an angle above
 /// 120 degrees) is first tried with a flip of its longest edge.
+/// Several vertices at one point (where the surface runs through a lattice corner) collapse one
+/// after the other; a triangle that was degenerate must come out facing the way the normals at
+/// its corners do.
 /// Deterministic: triangles are visited in index order, then those whose shape changed.
-/// Preconditions: mesh manifold and consistently oriented; box_faces.size() == vertex_count().
+/// Preconditions: mesh manifold and consistently oriented; one normal per vertex (the surface's,
+/// zero where unknown); box_faces.size() == vertex_count().
 ThinTriangleReport remove_thin_triangles(Mesh& mesh, std::span<const std::uint8_t> box_faces,
                                          const ThinTriangleSettings& settings);
 
