@@ -77,7 +77,7 @@ void OutputQueue::push_text(std::shared_ptr<const std::string> text, bool droppa
     if (closed_) return;
     if (droppable && queued_bytes_ > 0 && queued_bytes_ + text->size() > budget_) return;
     enqueue(lock, {Outgoing::Kind::text, std::move(text), nullptr, {}, Clock::now()});
-    if (queued_bytes_ > 2 * budget_) overflowed_ = true;
+    if (text_bytes_ > budget_) overflowed_ = true;
     const bool wake = claim_writer(lock) || overflowed_;
     lock.unlock();
     notify(wake);
@@ -90,6 +90,7 @@ void OutputQueue::close() {
     queue_.clear();
     streams_.clear();
     queued_bytes_ = in_flight_bytes_;
+    text_bytes_ = 0;
     if (metrics_) metrics_->queued_bytes.add(-static_cast<std::int64_t>(dropped));
 }
 
@@ -102,6 +103,7 @@ std::optional<Outgoing> OutputQueue::next() {
     writer_busy_ = true;
     Outgoing message = std::move(queue_.front());
     queue_.pop_front();
+    if (!message.binary()) text_bytes_ -= message.size();
     in_flight_bytes_ = message.size();
     return message;
 }
@@ -153,6 +155,7 @@ bool OutputQueue::claim_writer(const Lock&) {
 
 void OutputQueue::enqueue(const Lock&, Outgoing message) {
     queued_bytes_ += message.size();
+    if (!message.binary()) text_bytes_ += message.size();
     if (metrics_) metrics_->queued_bytes.add(static_cast<std::int64_t>(message.size()));
     queue_.push_back(std::move(message));
 }

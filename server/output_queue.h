@@ -13,8 +13,9 @@
 // So a slow reader never makes the server buffer more than the budget plus one keyframe per
 // session, and never gets a broken stream: a gap in sequence numbers is always followed by a
 // keyframe. Text replies are never dropped (their number is bounded by the client's own
-// requests), except `progress`, which is informational; a client that lets unsent replies pile up
-// beyond twice the budget is marked overflowed and should be disconnected.
+// requests), except `progress`, which is informational; a client that lets unsent text messages
+// pile up beyond the budget (it sends requests but does not read the replies) is marked
+// overflowed and should be disconnected.
 #pragma once
 
 #include <cstdint>
@@ -115,6 +116,7 @@ class OutputQueue {
     std::deque<Outgoing> queue_;
     std::size_t queued_bytes_ = 0;  // including the message in flight
     std::size_t in_flight_bytes_ = 0;
+    std::size_t text_bytes_ = 0;  // text messages queued, not in flight
     std::map<protocol::SessionId, StreamState> streams_;
     bool writer_busy_ = false;
     bool closed_ = false;

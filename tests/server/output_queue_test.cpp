@@ -156,6 +156,15 @@ TEST(OutputQueue, progress_is_dropped_over_budget_replies_mark_overflow) {
     EXPECT_TRUE(queue.overflowed());
 }
 
+TEST(OutputQueue, large_frames_ahead_of_a_reply_are_no_overflow) {
+    OutputQueue queue(100, {}, nullptr);
+    const auto s = session(1);
+    queue.expect_keyframe(s);
+    queue.push_keyframe(s, frame(10000));
+    queue.push_text(text("updated"));
+    EXPECT_FALSE(queue.overflowed());
+}
+
 TEST(OutputQueue, close_refuses_everything_and_settles_the_metrics) {
     Metrics metrics;
     {
