@@ -37,6 +37,10 @@ int serve(const ServerConfig& config) {
             {{"address", config.bind_address}, {"port", config.port}, {"message", e.what()}});
         return 1;
     }
+    // One plain line for the person who started the server; the logs are for machines.
+    std::printf("isomesh-server: open %s in a browser (WebSocket at /ws); Ctrl-C stops it\n",
+                browser_url(config, port).c_str());
+    std::fflush(stdout);
     logger.info("listening", {{"address", config.bind_address},
                               {"port", port},
                               {"url", browser_url(config, port)},
