@@ -332,7 +332,7 @@ bool MeshSession::refine_turn(const Inbox& inbox) {
     if (converged_) {
         send_converged(inbox);
     } else {
-        send_progress(inbox, false);
+        send_progress(inbox);
     }
     return !converged_;
 }
@@ -400,34 +400,32 @@ std::shared_ptr<const Bytes> MeshSession::encode_keyframe(std::uint16_t flags,
     return std::make_shared<const Bytes>(std::move(encoded.value().bytes));
 }
 
-void MeshSession::send_progress(const Inbox& inbox, bool force) {
-    const Clock::time_point now = Clock::now();
-    const double elapsed = seconds_between(last_progress_, now);
-    if (!force && now - last_progress_ < services_.settings.progress_interval) return;
+template <class Message>
+Message MeshSession::statistics() const {
     const MeshStats stats = refiner_->stats();
-    protocol::Progress progress;
-    progress.session = id_;
-    progress.version = current_.state.version;
-    progress.sequence = sequence_;
-    progress.triangles = stats.triangles;
-    progress.error_max = stats.max_error;
-    progress.error_total = stats.total_error;
-    progress.splits_per_second = elapsed > 0 ? splits_since_progress_ / elapsed : 0;
-    broadcast(inbox.subscribers, progress, true);
-    last_progress_ = now;
-    splits_since_progress_ = 0;
-}
-
-void MeshSession::send_converged(const Inbox& inbox) {
-    const MeshStats stats = refiner_->stats();
-    const RefineCounters& counters = refiner_->counters();
-    protocol::Converged message;
+    Message message;
     message.session = id_;
     message.version = current_.state.version;
     message.sequence = sequence_;
     message.triangles = stats.triangles;
     message.error_max = stats.max_error;
     message.error_total = stats.total_error;
+    return message;
+}
+
+void MeshSession::send_progress(const Inbox& inbox) {
+    const Clock::time_point now = Clock::now();
+    if (now - last_progress_ < services_.settings.progress_interval) return;
+    auto progress = statistics<protocol::Progress>();
+    progress.splits_per_second = splits_since_progress_ / seconds_between(last_progress_, now);
+    broadcast(inbox.subscribers, progress, true);
+    last_progress_ = now;
+    splits_since_progress_ = 0;
+}
+
+void MeshSession::send_converged(const Inbox& inbox) {
+    const RefineCounters& counters = refiner_->counters();
+    auto message = statistics<protocol::Converged>();
     message.splits = counters.splits - counters_at_version_.splits;
     message.merges = counters.merges - counters_at_version_.merges;
     message.first_mesh_ms = first_mesh_ms_;

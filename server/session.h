@@ -121,7 +121,10 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     bool refine_turn(const Inbox& inbox);
     void serve_keyframes(const std::vector<KeyframeRequest>& requests);
     void flush(const Inbox& inbox, bool converged);
-    void send_progress(const Inbox& inbox, bool force);
+    /// A `progress` or `converged` message with the mesh's statistics filled in.
+    template <class Message>
+    Message statistics() const;
+    void send_progress(const Inbox& inbox);
     void send_converged(const Inbox& inbox);
     void observe_slice(Clock::time_point start);
     std::shared_ptr<const Bytes> encode_keyframe(std::uint16_t flags, std::uint32_t version) const;
