@@ -6,6 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 : "${FUZZ_SECONDS_FRAME_DECODER:=20}"
 : "${FUZZ_SECONDS_CONTROL_MESSAGE:=20}"
+: "${FUZZ_SECONDS_CONTROL_HANDLING:=20}"
 if ! command -v clang++ >/dev/null; then
   echo "fuzz: clang++ not found, fuzz targets skipped"; exit 0
 fi

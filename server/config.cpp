@@ -114,6 +114,8 @@ const std::vector<Option>& options() {
                        &ServerConfig::batch_ms, 1, 10'000),
         integer_option("batch-triangles", "triangles changed that trigger sending a delta",
                        &ServerConfig::batch_triangles, 1, kU32),
+        integer_option("draco-speed", "Draco encoder speed, 0 (smallest frames) to 10 (fastest)",
+                       &ServerConfig::draco_speed, 0, 10),
         integer_option("max-message-bytes", "largest control message accepted",
                        &ServerConfig::max_message_bytes, 256, 64 << 20),
         integer_option("max-sessions-per-connection", "sessions one connection may hold",

@@ -32,6 +32,7 @@ struct ServerConfig {
     std::uint32_t slice_us = 2000;  ///< refinement time slice per turn of a session
     std::uint32_t batch_ms = 20;    ///< deltas are flushed at least this often while refining
     std::uint32_t batch_triangles = 2000;  ///< ... and as soon as this many triangles changed
+    unsigned draco_speed = 2;  ///< Draco encoder speed: 0 smallest frames ... 10 fastest
 
     // limits
     std::size_t max_message_bytes = 1 << 20;  ///< larger control messages get too_large

@@ -18,6 +18,7 @@ SessionSettings session_settings(const ServerConfig& config) {
     s.batch_interval = std::chrono::milliseconds(config.batch_ms);
     s.batch_triangles = config.batch_triangles;
     s.eval_timeout = std::chrono::milliseconds(config.eval_timeout_ms);
+    s.encoding_speed = static_cast<int>(config.draco_speed);
     return s;
 }
 

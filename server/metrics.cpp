@@ -58,7 +58,8 @@ void Histogram::render(std::string& out, const std::string& name) const {
 Metrics::Metrics()
     : first_mesh_seconds(latency_bounds()),
       frame_latency_seconds(latency_bounds()),
-      slice_seconds(latency_bounds()) {}
+      slice_seconds(latency_bounds()),
+      encode_seconds(latency_bounds()) {}
 
 std::string Metrics::render() const {
     std::string out;
@@ -105,6 +106,7 @@ std::string Metrics::render() const {
     histogram("frame_latency_seconds", "From a frame's creation to its last byte written.",
               frame_latency_seconds);
     histogram("slice_seconds", "One refinement turn of one session.", slice_seconds);
+    histogram("encode_seconds", "Encoding one frame.", encode_seconds);
     return out;
 }
 

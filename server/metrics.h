@@ -77,6 +77,7 @@ struct Metrics {
     Histogram first_mesh_seconds;     ///< from a version's request to its keyframe being queued
     Histogram frame_latency_seconds;  ///< from a frame's creation to its last byte written
     Histogram slice_seconds;          ///< one refinement turn of one session
+    Histogram encode_seconds;         ///< encoding one frame (Draco and id lists)
 
     /// Every metric in the Prometheus text exposition format.
     std::string render() const;

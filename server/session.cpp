@@ -274,6 +274,7 @@ MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) 
 
     encoding_.grid =
         protocol::QuantizationGrid::for_box(version.state.box, services_.settings.position_bits);
+    encoding_.encoding_speed = services_.settings.encoding_speed;
     const RefinedMesh mesh = refiner_->mesh();
     wire_.reset(mesh.mesh, mesh.triangle_ids, mesh.vertex_ids);
     pending_.take();
@@ -374,6 +375,7 @@ void MeshSession::flush(const Inbox& inbox, bool converged) {
     frame_content.triangles = content.triangles;
     frame_content.base_triangle_id = wire_.next_wire_id();
     auto encoded = protocol::encode_delta(info, frame_content, encoding_);
+    services_.metrics.encode_seconds.observe(seconds_between(last_flush_, Clock::now()));
     if (!encoded) throw std::runtime_error("delta encoding failed: " + encoded.error().message);
     wire_.commit_wire_ids(content.refiner_ids, encoded.value().triangle_ids);
     auto frame = std::make_shared<const Bytes>(std::move(encoded.value().bytes));
@@ -394,8 +396,10 @@ std::shared_ptr<const Bytes> MeshSession::encode_keyframe(std::uint16_t flags,
     info.sequence = sequence_;
     info.timestamp_us = unix_time_us();
     info.function_version = version;
+    const Clock::time_point start = Clock::now();
     auto encoded = protocol::encode_keyframe(info, content.vertices, content.triangles,
                                              content.wire_ids, encoding_);
+    services_.metrics.encode_seconds.observe(seconds_between(start, Clock::now()));
     if (!encoded) throw std::runtime_error("keyframe encoding failed: " + encoded.error().message);
     return std::make_shared<const Bytes>(std::move(encoded.value().bytes));
 }
