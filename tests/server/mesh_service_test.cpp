@@ -346,7 +346,8 @@ TEST(MeshService, close_pause_resume_and_resync) {
     request(protocol::Pause{2, session});
     ASSERT_TRUE(a.wait_for([&] { return a.find<protocol::Ack>(protocol::RequestId{2}); }));
     // The turn under way when the pause came flushes its changes; then nothing more comes.
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    ASSERT_TRUE(a.wait_for(
+        [&] { return f.metrics.busy_workers.value() == 0 && f.metrics.run_queue.value() == 0; }));
     a.pump();
     const auto frames_when_paused = a.frames.size();
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
