@@ -46,7 +46,7 @@ std::vector<unsigned char> iso_bytes(int nx, int ny, int nz, const float box[6],
     int counts[3] = {nx, ny, nz};
     std::memcpy(bytes.data(), counts, 12);
     std::memcpy(bytes.data() + 12, box, 24);
-    std::memcpy(bytes.data() + 36, samples.data(), 4 * samples.size());
+    if (!samples.empty()) std::memcpy(bytes.data() + 36, samples.data(), 4 * samples.size());
     return bytes;
 }
 
