@@ -81,8 +81,9 @@ void WebSocketConnection::on_accept(beast::error_code ec) {
     });
     context_.metrics.connections.add(1);
     context_.logger.info("connection_opened", {{"client", client_->id()}, {"remote", remote_}});
-    if (closing_) return do_close(websocket::close_code::going_away);
-    do_read();
+    do_read();  // always pending: it completes when the connection ends, whoever ends it
+    if (closing_)
+        do_close(websocket::close_code::going_away);  // shutdown came during the handshake
 }
 
 void WebSocketConnection::do_read() {

@@ -312,11 +312,11 @@ describe('http', () => {
     const raw = await rawSocket(server);
     raw.send({ v: 1, type: 'create', id: 1, expression: 'x^2+y^2+z^2=4', box: BOX, constraints: { triangles: 2000 } });
     assert.equal((await raw.reply(1)).type, 'created');
+    await until(() => raw.frames.length >= 1, { what: 'the first keyframe' });
     const closeCode = new Promise((resolve) => raw.socket.once('close', (code) => resolve(code)));
     const { code } = await server.stop();
     assert.equal(code, 0);
     assert.equal(await closeCode, 1001); // going away
     assert.ok(raw.messages.some((m) => m.type === 'closed' && m.reason === 'shutdown'));
-    assert.ok(raw.frames.length >= 1);
   });
 });
