@@ -126,7 +126,6 @@ export class IsomeshClient extends Emitter {
         this.pending.delete(id);
         reject(new IsomeshError('timeout', `no reply to ${type} within ${this.options.requestTimeoutMs} ms`));
       }, this.options.requestTimeoutMs);
-      timer.unref?.(); // Node: a pending request alone does not keep the process alive
       this.pending.set(id, { resolve, reject, timer, onReply });
       this.socket.send(text);
     });
