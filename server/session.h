@@ -18,6 +18,7 @@
 
 #include <atomic>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -165,7 +166,9 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     WireMesh wire_;
     DeltaBuilder pending_;
     std::size_t pending_changes_ = 0;  // triangles and vertices changed in pending_
-    std::uint64_t sequence_ = 0;
+    // Incremented before each frame: unsigned wrap-around makes the first keyframe's number 0
+    // (PROTOCOL.md 6.3).
+    std::uint64_t sequence_ = std::numeric_limits<std::uint64_t>::max();
     bool converged_ = false;
     Clock::time_point last_flush_{};
     Clock::time_point last_progress_{};

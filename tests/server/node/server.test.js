@@ -66,6 +66,20 @@ describe('meshes', () => {
     assert.equal((await server.stop()).code, 0);
   });
 
+  test('frames of a new session are numbered 0, 1, 2, ... from its first keyframe', async () => {
+    const raw = await rawSocket(server);
+    try {
+      raw.send({ v: 1, type: 'create', id: 1, expression: 'x^2+y^2+z^2=4', box: BOX, constraints: { triangles: 2000 } });
+      assert.equal((await raw.reply(1)).type, 'created');
+      await until(() => raw.messages.some((m) => m.type === 'converged'), { what: 'converged' });
+      const headers = raw.frames.map((f) => ({ kind: f.readUInt8(5), sequence: Number(f.readBigUInt64LE(24)) }));
+      assert.deepEqual(headers[0], { kind: 1, sequence: 0 }, 'the first frame is keyframe 0');
+      headers.forEach((h, i) => assert.equal(h.sequence, i));
+    } finally {
+      raw.close();
+    }
+  });
+
   for (const surface of GALLERY) {
     test(`${surface.name}: watertight and identical to isomesh mesh`, async () => {
       const triangles = 4000;
