@@ -150,7 +150,7 @@ std::optional<Clock::time_point> MeshSession::orphaned_since() const {
 }
 
 void MeshSession::schedule() {
-    services_.pool.schedule(shared_from_this());
+    services_.pool.schedule(shared_from_this(), Lane::urgent);  // a request waits on this turn
 }
 
 // ---- the worker -------------------------------------------------------------------------------

@@ -2,6 +2,11 @@
 // round-robin. A task that wants more time after its turn goes to the back of the queue, so a
 // heavy model cannot starve a light one: with T tasks wanting work, each waits at most T - 1
 // turns between two of its own. A task is never run by two threads at once.
+//
+// Two lanes: work a user is waiting for (a new session's first mesh, a slider's new version, a
+// keyframe for a late subscriber) is scheduled in the urgent lane, served before any round-robin
+// turn, so its latency is one turn of the busiest worker rather than a whole round over every
+// refining session. Continuation turns always go to the round-robin lane.
 #pragma once
 
 #include <condition_variable>
@@ -28,7 +33,10 @@ class Task {
     friend class WorkerPool;
     enum class State { idle, queued, running, running_rescheduled };
     State state_ = State::idle;  // guarded by the pool's mutex
+    bool urgent_ = false;        // queued, or to be requeued, in the urgent lane; same guard
 };
+
+enum class Lane { round_robin, urgent };
 
 class WorkerPool {
   public:
@@ -41,9 +49,10 @@ class WorkerPool {
     WorkerPool(const WorkerPool&) = delete;
     WorkerPool& operator=(const WorkerPool&) = delete;
 
-    /// Gives `task` a turn soon: queues it when idle; when it is running, it gets another turn
-    /// after the current one; when queued, does nothing. Thread-safe; ignored after stop().
-    void schedule(const std::shared_ptr<Task>& task);
+    /// Gives `task` a turn soon: queues it in `lane` when idle; when it is running, it gets another
+    /// turn (in `lane`) after the current one; when queued, it moves to the urgent lane if `lane`
+    /// is urgent and otherwise stays. Thread-safe; ignored after stop().
+    void schedule(const std::shared_ptr<Task>& task, Lane lane = Lane::round_robin);
 
     /// Waits until no task is queued or running, or until `deadline`; true when idle.
     bool wait_idle(Clock::time_point deadline);
@@ -56,13 +65,18 @@ class WorkerPool {
 
   private:
     void work();
+    std::shared_ptr<Task> next_task();  // with the mutex held and a task queued
+    void enqueue(const std::shared_ptr<Task>& task);  // in the lane of task->urgent_
+    void promote(const std::shared_ptr<Task>& task);  // from the round-robin lane to urgent
     void finish_turn(const std::shared_ptr<Task>& task, bool wants_more);
+    bool nothing_queued() const { return urgent_.empty() && queue_.empty(); }
 
     mutable std::mutex mutex_;
     std::condition_variable wake_;
     std::condition_variable idle_;
     std::size_t running_ = 0;
-    std::deque<std::shared_ptr<Task>> queue_;
+    std::deque<std::shared_ptr<Task>> urgent_;
+    std::deque<std::shared_ptr<Task>> queue_;  // the round-robin lane
     bool stopping_ = false;
     Metrics* metrics_;
     ErrorHandler on_error_;

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <future>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -103,6 +104,54 @@ TEST(WorkerPool, task_never_runs_on_two_threads_and_reruns_when_scheduled_while_
     ASSERT_TRUE(pool.wait_idle(Clock::now() + 10s));
     EXPECT_EQ(task->max_concurrent.load(), 1);
     EXPECT_EQ(task->turns.load(), 2);  // the schedules while it ran collapse into one turn
+}
+
+/// A task whose first turn waits until released: while it runs, the test queues others behind it.
+struct BlockingTask : Task {
+    bool run_slice() override {
+        started.set_value();
+        release.get_future().wait();
+        return false;
+    }
+    std::promise<void> started, release;
+};
+
+TEST(WorkerPool, schedule_urgent_runs_before_round_robin_turns) {
+    std::vector<char> log;
+    std::mutex log_mutex;
+    WorkerPool pool(1);
+    auto blocker = std::make_shared<BlockingTask>();
+    pool.schedule(blocker);
+    blocker->started.get_future().wait();
+    auto a = std::make_shared<CountingTask>(2, 0ms, &log, 'a', &log_mutex);
+    auto b = std::make_shared<CountingTask>(1, 0ms, &log, 'b', &log_mutex);
+    auto u = std::make_shared<CountingTask>(2, 0ms, &log, 'U', &log_mutex);
+    pool.schedule(a);
+    pool.schedule(b);
+    pool.schedule(u, Lane::urgent);
+    blocker->release.set_value();
+    ASSERT_TRUE(pool.wait_idle(Clock::now() + 10s));
+    // U's first turn jumps the queue; its continuation waits its round-robin turn after a and b.
+    EXPECT_EQ(std::string(log.begin(), log.end()), "UabUa");
+}
+
+TEST(WorkerPool, schedule_urgent_promotes_a_queued_task) {
+    std::vector<char> log;
+    std::mutex log_mutex;
+    WorkerPool pool(1);
+    auto blocker = std::make_shared<BlockingTask>();
+    pool.schedule(blocker);
+    blocker->started.get_future().wait();
+    auto a = std::make_shared<CountingTask>(1, 0ms, &log, 'a', &log_mutex);
+    auto b = std::make_shared<CountingTask>(1, 0ms, &log, 'b', &log_mutex);
+    pool.schedule(a);
+    pool.schedule(b);
+    pool.schedule(b, Lane::urgent);
+    pool.schedule(b, Lane::urgent);  // already urgent: stays queued once
+    EXPECT_EQ(pool.queued(), 2u);
+    blocker->release.set_value();
+    ASSERT_TRUE(pool.wait_idle(Clock::now() + 10s));
+    EXPECT_EQ(std::string(log.begin(), log.end()), "ba");
 }
 
 TEST(WorkerPool, stop_drops_queued_work_and_joins) {
