@@ -106,52 +106,58 @@ TEST(WorkerPool, task_never_runs_on_two_threads_and_reruns_when_scheduled_while_
     EXPECT_EQ(task->turns.load(), 2);  // the schedules while it ran collapse into one turn
 }
 
-/// A task whose first turn waits until released: while it runs, the test queues others behind it.
-struct BlockingTask : Task {
-    bool run_slice() override {
-        started.set_value();
-        release.get_future().wait();
-        return false;
+/// A one-thread pool whose worker is held by a task until release(): what the test schedules
+/// meanwhile queues, and then runs in queue order, logging its name.
+class HeldPool {
+  public:
+    HeldPool() {
+        pool.schedule(blocker_);
+        blocker_->started.get_future().wait();
     }
-    std::promise<void> started, release;
+    std::shared_ptr<CountingTask> task(int turns, char name) {
+        return std::make_shared<CountingTask>(turns, 0ms, &log_, name, &log_mutex_);
+    }
+    /// Lets the queued tasks run; returns the names of their turns in order.
+    std::string release() {
+        blocker_->release.set_value();
+        EXPECT_TRUE(pool.wait_idle(Clock::now() + 10s));
+        return std::string(log_.begin(), log_.end());
+    }
+
+    WorkerPool pool{1};
+
+  private:
+    struct BlockingTask : Task {
+        bool run_slice() override {
+            started.set_value();
+            release.get_future().wait();
+            return false;
+        }
+        std::promise<void> started, release;
+    };
+    std::shared_ptr<BlockingTask> blocker_ = std::make_shared<BlockingTask>();
+    std::vector<char> log_;
+    std::mutex log_mutex_;
 };
 
 TEST(WorkerPool, schedule_urgent_runs_before_round_robin_turns) {
-    std::vector<char> log;
-    std::mutex log_mutex;
-    WorkerPool pool(1);
-    auto blocker = std::make_shared<BlockingTask>();
-    pool.schedule(blocker);
-    blocker->started.get_future().wait();
-    auto a = std::make_shared<CountingTask>(2, 0ms, &log, 'a', &log_mutex);
-    auto b = std::make_shared<CountingTask>(1, 0ms, &log, 'b', &log_mutex);
-    auto u = std::make_shared<CountingTask>(2, 0ms, &log, 'U', &log_mutex);
-    pool.schedule(a);
-    pool.schedule(b);
-    pool.schedule(u, Lane::urgent);
-    blocker->release.set_value();
-    ASSERT_TRUE(pool.wait_idle(Clock::now() + 10s));
+    HeldPool held;
+    held.pool.schedule(held.task(2, 'a'));
+    held.pool.schedule(held.task(1, 'b'));
+    held.pool.schedule(held.task(2, 'U'), Lane::urgent);
     // U's first turn jumps the queue; its continuation waits its round-robin turn after a and b.
-    EXPECT_EQ(std::string(log.begin(), log.end()), "UabUa");
+    EXPECT_EQ(held.release(), "UabUa");
 }
 
 TEST(WorkerPool, schedule_urgent_promotes_a_queued_task) {
-    std::vector<char> log;
-    std::mutex log_mutex;
-    WorkerPool pool(1);
-    auto blocker = std::make_shared<BlockingTask>();
-    pool.schedule(blocker);
-    blocker->started.get_future().wait();
-    auto a = std::make_shared<CountingTask>(1, 0ms, &log, 'a', &log_mutex);
-    auto b = std::make_shared<CountingTask>(1, 0ms, &log, 'b', &log_mutex);
-    pool.schedule(a);
-    pool.schedule(b);
-    pool.schedule(b, Lane::urgent);
-    pool.schedule(b, Lane::urgent);  // already urgent: stays queued once
-    EXPECT_EQ(pool.queued(), 2u);
-    blocker->release.set_value();
-    ASSERT_TRUE(pool.wait_idle(Clock::now() + 10s));
-    EXPECT_EQ(std::string(log.begin(), log.end()), "ba");
+    HeldPool held;
+    auto b = held.task(1, 'b');
+    held.pool.schedule(held.task(1, 'a'));
+    held.pool.schedule(b);
+    held.pool.schedule(b, Lane::urgent);
+    held.pool.schedule(b, Lane::urgent);  // already urgent: stays queued once
+    EXPECT_EQ(held.pool.queued(), 2u);
+    EXPECT_EQ(held.release(), "ba");
 }
 
 TEST(WorkerPool, stop_drops_queued_work_and_joins) {
