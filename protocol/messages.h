@@ -215,6 +215,9 @@ struct Closed {
     friend bool operator==(const Closed&, const Closed&) = default;
 };
 
+/// The reason's name on the wire ("closed", "expired", "shutdown", "error").
+std::string_view to_string(Closed::Reason reason);
+
 using ServerMessage =
     std::variant<Created, Updated, Subscribed, Ack, Pong, Progress, Converged, ErrorReply, Closed>;
 

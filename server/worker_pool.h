@@ -65,7 +65,7 @@ class WorkerPool {
 
   private:
     void work();
-    std::shared_ptr<Task> next_task();  // with the mutex held and a task queued
+    std::shared_ptr<Task> next_task();                // with the mutex held and a task queued
     void enqueue(const std::shared_ptr<Task>& task);  // in the lane of task->urgent_
     void promote(const std::shared_ptr<Task>& task);  // from the round-robin lane to urgent
     void finish_turn(const std::shared_ptr<Task>& task, bool wants_more);
