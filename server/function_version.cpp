@@ -83,7 +83,8 @@ std::optional<ErrorReply> set_constraints(FunctionVersion& version,
                           "' (known: " + names + ")");
     }
     version.error_measure = std::move(measure);
-    version.constraint = refinement_constraint(*c.triangles, *c.max_error);
+    version.constraint =
+        Constraint::budget_and_error_bound(static_cast<std::size_t>(*c.triangles), *c.max_error);
     version.state.constraints = c;
     return std::nullopt;
 }
@@ -94,12 +95,6 @@ void set_box(FunctionVersion& version, const protocol::Box& box) {
 }
 
 }  // namespace
-
-Constraint refinement_constraint(std::uint64_t triangles, double max_error) {
-    Constraint budget = Constraint::triangle_budget(static_cast<std::size_t>(triangles));
-    if (max_error <= 0) return budget;
-    return Constraint::max_error(max_error) && budget;
-}
 
 VersionResult first_version(const protocol::Create& request, const VersionLimits& limits) {
     FunctionVersion version;

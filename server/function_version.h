@@ -48,10 +48,4 @@ VersionResult first_version(const protocol::Create& request, const VersionLimits
 VersionResult next_version(const FunctionVersion& current, const protocol::Update& request,
                            const VersionLimits& limits);
 
-/// The refinement constraint of a triangle budget and an error bound (0: none), as the thesis
-/// composes them (Definition 18): refine while the largest error exceeds the bound and the mesh
-/// has fewer triangles than the budget. The CLI's `isomesh mesh --triangles --max-error` must build
-/// the same constraint for its meshes to match the server's.
-Constraint refinement_constraint(std::uint64_t triangles, double max_error);
-
 }  // namespace isomesh::server

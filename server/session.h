@@ -47,10 +47,7 @@ struct SessionSettings {
     int position_bits = 14;
     /// Draco's encoder speed, 0 (smallest frames) to 10 (fastest); clients do not depend on it.
     int encoding_speed = protocol::MeshEncoding{}.encoding_speed;
-    /// Phase 1 before refinement starts coarser than phase 1 alone, as `isomesh mesh --triangles`
-    /// does (clients/cli/refine_options.h, kRefineMinDepth): refinement spends triangles better
-    /// than a uniform octree level. Server and CLI must agree for their meshes to match.
-    int phase1_min_depth = 3;
+    int phase1_min_depth = kRefinePhase1MinDepth;
 };
 
 struct SessionServices {

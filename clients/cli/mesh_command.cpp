@@ -15,6 +15,7 @@
 #include "mesh_export.h"
 #include "output.h"
 #include "polygonize/polygonizer.h"
+#include "refine/refiner.h"
 #include "refine_options.h"
 #include "server_mesh.h"
 
@@ -153,7 +154,7 @@ int run_mesh(std::span<const std::string_view> raw_args) {
         settings.max_depth = parse_whole(d[1], "--depth MAX", 0, 16);
         if (settings.min_depth > settings.max_depth) throw UsageError("--depth: MIN exceeds MAX");
     } else if (refine_options.refine()) {
-        settings.min_depth = kRefineMinDepth;
+        settings.min_depth = kRefinePhase1MinDepth;
     }
     if (args.has("threads")) {
         settings.threads =

@@ -41,11 +41,8 @@ RefineOutcome refine_first_mesh(std::shared_ptr<const Field> field, const Mesh& 
     const auto start = std::chrono::steady_clock::now();
     RefineSettings settings;
     settings.error_measure = make_error_measure(options.error_measure);
-    Constraint budget =
-        Constraint::triangle_budget(options.triangles.value_or(kDefaultTriangleCap));
-    settings.constraint = options.max_error
-                              ? Constraint::max_error(*options.max_error) && std::move(budget)
-                              : std::move(budget);
+    settings.constraint = Constraint::budget_and_error_bound(
+        options.triangles.value_or(kDefaultTriangleCap), options.max_error.value_or(0.0));
     if (options.triangles && first.triangles.size() > *options.triangles) {
         print_warning("phase 1 alone has " + std::to_string(first.triangles.size()) +
                       " triangles, more than --triangles " + std::to_string(*options.triangles) +

@@ -21,10 +21,6 @@ inline constexpr OptionSpec kRefineOptionSpecs[] = {
 /// The triangle budget of --max-error without --triangles (also the server's default maximum).
 inline constexpr std::size_t kDefaultTriangleCap = 2'000'000;
 
-/// Phase 1 for refinement starts coarser than for phase 1 alone (unless --depth says otherwise):
-/// refinement spends triangles better than a uniform octree level (tests/refine/accuracy_test).
-inline constexpr int kRefineMinDepth = 3;
-
 inline constexpr std::string_view kRefineUsage =
     R"(  --triangles N       refine (phase 2) to N triangles: met within 1 and never exceeded,
                       unless phase 1 alone has more (then lower --depth MIN)

@@ -38,6 +38,12 @@ Constraint Constraint::max_error(double error) {
     return Constraint(make_node(Kind::MaxError, error));
 }
 
+Constraint Constraint::budget_and_error_bound(std::size_t triangles, double max_error) {
+    Constraint budget = triangle_budget(triangles);
+    if (max_error <= 0) return budget;
+    return Constraint::max_error(max_error) && std::move(budget);
+}
+
 Constraint Constraint::total_error(double error) {
     return Constraint(make_node(Kind::TotalError, error));
 }

@@ -38,6 +38,9 @@ class Constraint {
     static Constraint triangle_budget(std::size_t triangles);
     /// Refine while some triangle's error exceeds `error` (thesis: local error bound).
     static Constraint max_error(double error);
+    /// What a user asks for: refine up to `triangles`, and, when `max_error` > 0, stop once no
+    /// triangle's error exceeds it: max_error(e) && triangle_budget(n), or the budget alone.
+    static Constraint budget_and_error_bound(std::size_t triangles, double max_error);
     /// Refine while the errors sum to more than `error` (thesis: global error bound).
     static Constraint total_error(double error);
     /// Any predicate on the statistics; it should be monotone (false stays false as the mesh is

@@ -50,6 +50,11 @@
 
 namespace isomesh {
 
+/// The octree depth phase 1 starts from when its mesh is to be refined: coarser than for phase 1
+/// alone, since refinement spends triangles better than a uniform octree level
+/// (tests/refine/accuracy_test). The server and the CLI both use it, so their meshes match.
+inline constexpr int kRefinePhase1MinDepth = 3;
+
 struct RefineSettings {
     /// The split priority; nullptr means "distance" (see error_measures.h for why).
     std::shared_ptr<const ErrorMeasure> error_measure;

@@ -42,6 +42,12 @@ TEST(Constraint, and_refines_while_both_and_caps_if_any_part_caps) {
     EXPECT_EQ(c.describe(), "(max_error > 0.1 and triangles < 100)");
 }
 
+TEST(Constraint, budget_and_error_bound_adds_the_bound_only_when_positive) {
+    EXPECT_EQ(Constraint::budget_and_error_bound(100, 0.1).describe(),
+              "(max_error > 0.1 and triangles < 100)");
+    EXPECT_EQ(Constraint::budget_and_error_bound(100, 0.0).describe(), "triangles < 100");
+}
+
 // In an "or", a budget is a minimum count, not a cap.
 TEST(Constraint, or_refines_while_either_and_caps_only_if_all_cap) {
     const Constraint c = Constraint::triangle_budget(100) || Constraint::total_error(1.0);

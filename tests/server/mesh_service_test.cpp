@@ -117,10 +117,10 @@ TEST_P(GallerySurface, streams_a_keyframe_then_deltas_to_the_reference_mesh) {
 
     ASSERT_FALSE(a.frames.empty());
     EXPECT_EQ(a.frames.front().kind, protocol::FrameKind::keyframe);
-    EXPECT_EQ(a.frames.front().sequence, 1u);
+    EXPECT_EQ(a.frames.front().sequence, 0u);  // PROTOCOL.md 6.3
     for (std::size_t i = 1; i < a.frames.size(); ++i) {
         EXPECT_EQ(a.frames[i].kind, protocol::FrameKind::delta);
-        EXPECT_EQ(a.frames[i].sequence, i + 1);
+        EXPECT_EQ(a.frames[i].sequence, i);
     }
     EXPECT_EQ(a.converged(session, 1)->sequence, a.frames.back().sequence);
     for (auto outcome : a.outcomes) EXPECT_EQ(outcome, protocol::MeshReplica::Outcome::applied);
