@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include "polygonize/polygonizer.h"
 
@@ -234,6 +235,7 @@ MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& in
             if (field_stale_) return Start::superseded;
         }
         refiner_->set_constraint(version.constraint);
+        version_frame_due_ = true;
         first_mesh_ms_ = 0;
     }
     current_ = std::move(version);
@@ -325,9 +327,13 @@ bool MeshSession::refine_turn(const Inbox& inbox) {
     if (step.cancelled) return true;  // a new version or a close waits in the inbox
 
     converged_ = step.converged;
-    const Clock::time_point now = Clock::now();
-    if (converged_ || pending_changes_ >= services_.settings.batch_triangles ||
-        now - last_flush_ >= services_.settings.batch_interval) {
+    if (refiner_->field_change_pending()) {
+        // A new version is half applied: a frame now would mix surfaces. The user is waiting for
+        // it, so the next turn stays in the urgent lane (worker_pool.h).
+        schedule();
+    } else if (converged_ || std::exchange(version_frame_due_, false) ||
+               pending_changes_ >= services_.settings.batch_triangles ||
+               Clock::now() - last_flush_ >= services_.settings.batch_interval) {
         flush(inbox, converged_);
     }
     if (converged_) {

@@ -163,6 +163,7 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     WireMesh wire_;
     DeltaBuilder pending_;
     std::size_t pending_changes_ = 0;  // triangles and vertices changed in pending_
+    bool version_frame_due_ = false;   // a new version's first frame goes out as soon as it can
     // Incremented before each frame: unsigned wrap-around makes the first keyframe's number 0
     // (PROTOCOL.md 6.3).
     std::uint64_t sequence_ = std::numeric_limits<std::uint64_t>::max();

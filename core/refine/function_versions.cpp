@@ -56,8 +56,8 @@ bool Refiner::Impl::refresh_pending() const {
     return refresh_stage_ != RefreshStage::None;
 }
 
-std::size_t Refiner::Impl::refresh_some(std::size_t limit) {
-    while (refresh_next_ == refresh_list_.size()) {
+void Refiner::Impl::skip_finished_refresh_stages() {
+    while (refresh_stage_ != RefreshStage::None && refresh_next_ == refresh_list_.size()) {
         refresh_list_.clear();
         refresh_next_ = 0;
         if (refresh_stage_ == RefreshStage::Vertices) {
@@ -70,9 +70,13 @@ std::size_t Refiner::Impl::refresh_some(std::size_t limit) {
                 if (merge_queue_->contains(r)) refresh_list_.push_back(r);
         } else {
             refresh_stage_ = RefreshStage::None;
-            return 0;
         }
     }
+}
+
+std::size_t Refiner::Impl::refresh_some(std::size_t limit) {
+    skip_finished_refresh_stages();
+    if (refresh_stage_ == RefreshStage::None) return 0;
     // Items are refreshed in batches (batched evaluations); each item's result does not depend
     // on the batch it is in, so neither does the mesh depend on the step sizes.
     constexpr std::size_t kBatch = 256;
@@ -85,6 +89,8 @@ std::size_t Refiner::Impl::refresh_some(std::size_t limit) {
         refresh_leaves(items);
     else
         refresh_records(items);
+    // The last batch ends the refresh at once: field_change_pending() is false right after it.
+    skip_finished_refresh_stages();
     return count;
 }
 

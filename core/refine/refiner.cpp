@@ -366,6 +366,9 @@ void Refiner::set_field(std::shared_ptr<const Field> field) {
 std::uint64_t Refiner::version() const {
     return impl_->version();
 }
+bool Refiner::field_change_pending() const {
+    return impl_->field_change_pending();
+}
 MeshStats Refiner::stats() const {
     return impl_->stats();
 }

@@ -162,6 +162,9 @@ class Refiner {
     /// step's delta removes every triangle and adds the new mesh). Throws on a null field.
     void set_field(std::shared_ptr<const Field> field);
     std::uint64_t version() const;
+    /// True from set_field until step() has moved every vertex onto the new surface and updated
+    /// every error (or restarted from a fresh phase-1 mesh): until then the mesh mixes versions.
+    bool field_change_pending() const;
 
     MeshStats stats() const;
     QueueEnds queue_ends() const;

@@ -161,6 +161,7 @@ class Refiner::Impl {
     void set_constraint(Constraint c) { constraint_ = std::move(c); }
     const Constraint& constraint() const { return constraint_; }
     std::uint64_t version() const { return version_; }
+    bool field_change_pending() const { return restart_pending_ || refresh_pending(); }
     MeshStats stats() const;
     QueueEnds queue_ends() const {
         return {split_queue_->extreme_priority(), merge_queue_->extreme_priority()};
@@ -231,6 +232,7 @@ class Refiner::Impl {
     bool refresh_pending() const;
     /// Refreshes up to `limit` (> 0) items of the current stage; returns how many.
     std::size_t refresh_some(std::size_t limit);
+    void skip_finished_refresh_stages();
     void refresh_vertices(std::span<const std::uint32_t> vertices);
     void refresh_leaves(std::span<const std::uint32_t> leaves);
     void refresh_records(std::span<const std::uint32_t> records);

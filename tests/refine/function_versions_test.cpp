@@ -94,6 +94,24 @@ TEST(RefinerVersions, a_small_change_moves_vertices_without_restarting) {
     EXPECT_EQ(refiner.counters().refreshed_vertices, before.vertex_ids.size());
 }
 
+TEST(RefinerVersions, field_change_pending_until_the_last_vertex_and_error_is_refreshed) {
+    Refiner refiner(sphere_a(4.0), sphere_settings(2000));
+    refiner.run_to_convergence();
+    EXPECT_FALSE(refiner.field_change_pending());
+    refiner.set_field(sphere_a(4.2));
+    EXPECT_TRUE(refiner.field_change_pending());
+    // Small steps: the flag drops in the step that refreshes the last item, not a step later.
+    std::size_t refreshed = 0;
+    while (refiner.field_change_pending()) {
+        const StepResult r = refiner.step(StepBudget{64, 0});
+        ASSERT_GT(r.refreshed, 0u) << "a step while pending refreshes something";
+        refreshed += r.refreshed;
+    }
+    EXPECT_EQ(refiner.counters().refreshed_vertices, refiner.mesh().vertex_ids.size());
+    EXPECT_LT(max_distance_to_sphere(refiner.mesh().mesh, std::sqrt(4.2)), 1e-8);
+    EXPECT_GE(refreshed, refiner.mesh().vertex_ids.size() + refiner.mesh().triangle_ids.size());
+}
+
 // Two spheres that merge into one: the topology of the phase-1 mesh changes, so the refiner starts
 // again from it.
 Mesh translated(Mesh mesh, const glm::dvec3& offset) {
