@@ -8,7 +8,7 @@ cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release "$@"
 cmake --build build -j "$jobs"
 
 # npm packages, pinned by each folder's package-lock.json; `npm ci` only when node_modules is
-# missing or older than the lock file. Vite 8 needs Node >= 20.19.
+# missing or older than the lock file. Vite 6 runs on Debian 12's Node 18 as on newer ones.
 npm_ci() {
   if [ ! -f "$1/node_modules/.package-lock.json" ] || [ "$1/package-lock.json" -nt "$1/node_modules/.package-lock.json" ]; then
     (cd "$1" && npm ci --no-audit --no-fund)
