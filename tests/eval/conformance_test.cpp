@@ -22,6 +22,11 @@ struct Backend {
     TestFunction function;  // its tape is null and reference empty for grids
 };
 
+/// Test output names the case rather than dumping its bytes.
+void PrintTo(const Backend& c, std::ostream* os) {
+    *os << c.name;
+}
+
 /// A grid sampling g on an uneven lattice over a box, so cells are not cubes.
 template <class G>
 IsoGrid sampled_grid(int nx, int ny, int nz, const Box& box, const G& g) {

@@ -29,6 +29,11 @@ struct GalleryCase {
     int max_depth = 9;
 };
 
+/// Test output names the case rather than dumping its bytes.
+void PrintTo(const GalleryCase& c, std::ostream* os) {
+    *os << c.name;
+}
+
 Box cube(double lo, double hi) {
     return {{lo, lo, lo}, {hi, hi, hi}};
 }

@@ -24,6 +24,11 @@ struct GalleryCase {
     Box box{{-5.0, -5.0, -5.0}, {5.0, 5.0, 5.0}};
 };
 
+/// Test output names the case rather than dumping its bytes.
+void PrintTo(const GalleryCase& c, std::ostream* os) {
+    *os << c.name;
+}
+
 std::vector<GalleryCase> gallery() {
     const Box small{{-2.0, -2.0, -2.0}, {2.0, 2.0, 2.0}};
     return {
