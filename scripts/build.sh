@@ -7,12 +7,20 @@ jobs=$(nproc)
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release "$@"
 cmake --build build -j "$jobs"
 
-# npm packages, pinned by each folder's package-lock.json; `npm ci` only when node_modules is
+# npm packages, pinned by each folder's package-lock.json; installed only when node_modules is
 # missing or older than the lock file. Vite 6 runs on Debian 12's Node 18 as on newer ones.
-npm_ci() {
-  if [ ! -f "$1/node_modules/.package-lock.json" ] || [ "$1/package-lock.json" -nt "$1/node_modules/.package-lock.json" ]; then
-    (cd "$1" && npm ci --no-audit --no-fund)
+# clients/web uses `npm install --no-save` rather than `npm ci`: Vite's bundler (rollup) lists one
+# optional native package per platform, and a registry mirror that serves only this platform's
+# leaves the others out of the lock file, which `npm ci` then refuses. `--no-save` still installs
+# exactly the locked versions and never rewrites the lock.
+npm_install() {
+  local dir=$1
+  shift
+  if [ ! -f "$dir/node_modules/.package-lock.json" ] || [ "$dir/package-lock.json" -nt "$dir/node_modules/.package-lock.json" ]; then
+    (cd "$dir" && npm "$@" --no-audit --no-fund)
   fi
 }
-for dir in clients/js clients/web tests/web; do npm_ci "$dir"; done
+npm_install clients/js ci
+npm_install clients/web install --no-save
+npm_install tests/web ci
 (cd clients/web && npm run build)
