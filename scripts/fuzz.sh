@@ -19,7 +19,17 @@ for t in $targets; do
   seconds=${!seconds_var:-${FUZZ_SECONDS:-60}}
   scratch=$(mktemp -d)
   echo "fuzz: $t for ${seconds}s"
+  log="build-fuzz/$t.log"
+  status=0
   ./build-fuzz/bin/"fuzz_$t" -max_total_time="$seconds" -print_final_stats=1 \
-    -artifact_prefix="build-fuzz/$t-" "$scratch" "tests/fuzz/$t" 2>&1 | tail -n 12
+    -artifact_prefix="build-fuzz/$t-" "$scratch" "tests/fuzz/$t" >"$log" 2>&1 || status=$?
   rm -rf "$scratch"
+  if [ "$status" -ne 0 ]; then
+    # The sanitizer's report (where, what, which threads), not just libFuzzer's final lines.
+    echo "fuzz: $t failed (exit $status); its report, from $log:"
+    sed -n '/ERROR:/,$p' "$log" | head -n 120
+    tail -n 12 "$log"
+    exit "$status"
+  fi
+  tail -n 12 "$log"
 done

@@ -216,8 +216,10 @@ struct Tables {
 };
 
 const Tables& tables() {
-    static const Tables instance;
-    return instance;
+    // Never destroyed: a worker thread may still be meshing while the process exits (a server
+    // stopped by exit(), a fuzzer reaching its time limit), after static destructors have run.
+    static const Tables* const instance = new Tables();
+    return *instance;
 }
 
 }  // namespace
