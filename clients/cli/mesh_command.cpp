@@ -178,6 +178,8 @@ int run_mesh(std::span<const std::string_view> raw_args) {
     if (depth_of_grid && !args.has("depth")) {
         settings.min_depth = settings.max_depth = *depth_of_grid;
     }
+    // A sampled grid has no detail below its cells for the octree to look for.
+    if (depth_of_grid) settings.feature_levels = 0;
     if (args.has("box")) {
         settings.box = parse_mesh_box(*args.value("box"));
     } else if (names_iso_file(source)) {
