@@ -47,8 +47,10 @@ class WorkBudget {
         };
     }
 
+    /// No limit at all.
+    WorkBudget() = default;
     /// No time limit; cancelled only by `cancel` (may be null).
-    explicit WorkBudget(const std::atomic<bool>* cancel = nullptr) : cancel_(cancel) {}
+    explicit WorkBudget(const std::atomic<bool>* cancel) : cancel_(cancel) {}
 
     /// `limit` units of `clock` from now; `cancel` may be null.
     WorkBudget(std::int64_t limit, Clock clock, const std::atomic<bool>* cancel = nullptr)
