@@ -219,14 +219,18 @@ Octree::Octree(const Lattice& lattice, const OctreeSettings& settings)
     counts_.pending = 1;
 }
 
-void Octree::advance(EvaluatorPool& pool, ValueMap& values, const WorkBudget& budget) {
+void Octree::advance(EvaluatorPool& pool, ValueMap& values, const WorkBudget& budget,
+                     std::size_t max_frontier) {
     std::vector<CellId> round;
     while (!pending_.empty() && !found_region() && !budget.exhausted()) {
-        // The next cells of the shallowest pending level.
+        const std::size_t frontier = pending_.size() + settled_.size();
+        if (frontier >= max_frontier) break;
+        // The next cells of the shallowest pending level: as many as may be split (into 8 each)
+        // without passing max_frontier.
+        const std::size_t room = std::min(kCellsPerRound, (max_frontier - frontier) / 7 + 1);
         round.clear();
         const int depth = cell_of_level_order_key(*pending_.begin()).depth;
-        for (auto it = pending_.begin(); it != pending_.end() && round.size() < kCellsPerRound;
-             ++it) {
+        for (auto it = pending_.begin(); it != pending_.end() && round.size() < room; ++it) {
             const CellId cell = cell_of_level_order_key(*it);
             if (cell.depth != depth) break;
             round.push_back(cell);

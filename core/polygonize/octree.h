@@ -77,9 +77,11 @@ class Octree {
 
     /// Classifies pending cells, shallowest first and in octree order within a level, on the
     /// pool's workers (each walking its cells' ancestors with Evaluator::push/pop for tape
-    /// simplification), until none is left, a region is found, or the budget is exhausted
-    /// (checked before every cell). Values of f it evaluates are added to `values`.
-    void advance(EvaluatorPool& pool, ValueMap& values, const WorkBudget& budget);
+    /// simplification), until none is left, a region is found, the budget is exhausted (checked
+    /// before every cell), or the frontier holds `max_frontier` cells (about: one classification
+    /// may add up to 8). Values of f it evaluates are added to `values`.
+    void advance(EvaluatorPool& pool, ValueMap& values, const WorkBudget& budget,
+                 std::size_t max_frontier = ~std::size_t{0});
 
     /// No cell is pending.
     bool complete() const { return pending_.empty(); }

@@ -450,8 +450,8 @@ Polygonizer::Polygonizer(std::shared_ptr<const Field> field, const PolygonizeSet
       lattice_(settings.box, kMaxOctreeDepth),
       octree_(lattice_, octree_settings(settings)) {}
 
-void Polygonizer::advance(const WorkBudget& budget) {
-    octree_.advance(pool_, values_, budget);
+void Polygonizer::advance(const WorkBudget& budget, std::size_t max_frontier) {
+    octree_.advance(pool_, values_, budget, max_frontier);
 }
 
 PolygonizeResult Polygonizer::mesh(const WorkBudget& budget) {

@@ -77,8 +77,9 @@ class Polygonizer {
     Polygonizer(std::shared_ptr<const Field> field, const PolygonizeSettings& settings);
 
     /// Classifies octree cells, the largest first, until all are classified, a region where f
-    /// is zero is found, or the budget is exhausted.
-    void advance(const WorkBudget& budget);
+    /// is zero is found, the budget is exhausted, or the octree's frontier holds about
+    /// `max_frontier` cells (a first mesh meant to be quick stops there).
+    void advance(const WorkBudget& budget, std::size_t max_frontier = ~std::size_t{0});
     /// All cells are classified (or a region was found): mesh() is phase 1's final mesh.
     bool complete() const { return octree_.complete() || octree_.found_region(); }
     /// Stops the classification for good: pending cells become unresolved.
