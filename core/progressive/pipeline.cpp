@@ -73,6 +73,7 @@ Pipeline::~Pipeline() = default;
 PipelineStep Pipeline::step(const WorkBudget& budget) {
     PipelineStep out;
     const bool first = !refiner_;
+    const bool resolving = phase1_ != nullptr;
     if (first) {
         first_mesh(budget);
     } else if (phase1_) {
@@ -82,10 +83,13 @@ PipelineStep Pipeline::step(const WorkBudget& budget) {
     } else {
         refine(out, {kAllOperations, budget});
     }
+    // Phase 1 just ended: refine with what the step has left, so that a mesh already meeting the
+    // constraint leaves flagged converged.
+    if (refiner_ && resolving && !phase1_ && !budget.exhausted())
+        refine(out, {kAllOperations, budget});
     if (refiner_ && first) {
         out.delta = refiner_->snapshot();
         out.restarted = true;
-        out.converged = false;
     } else if (refiner_) {
         refine(out, {0, budget});  // what the refiner holds back: a reset's replacement
     }
