@@ -111,13 +111,25 @@ bool CollapseMesh::can_collapse(std::uint32_t v, std::uint32_t u) const {
             if (!was_degenerate) return false;
             continue;
         }
+        const glm::dvec3 n0 = glm::cross(before[1] - before[0], before[2] - before[0]);
         const glm::dvec3 n1 = glm::cross(after[1] - after[0], after[2] - after[0]);
-        const glm::dvec3 reference =
-            was_degenerate ? mesh_.normals[tri[0]] + mesh_.normals[tri[1]] + mesh_.normals[tri[2]]
-                           : glm::cross(before[1] - before[0], before[2] - before[0]);
-        if (!(glm::dot(reference, n1) > 0.0)) return false;
+        const glm::dvec3 surface_before = corner_normals(tri);
+        const glm::dvec3 surface_after =
+            corner_normals({tri[0] == v ? u : tri[0], tri[1] == v ? u : tri[1],
+                            tri[2] == v ? u : tri[2]});
+        if (!(glm::dot(was_degenerate ? surface_before : n0, n1) > 0.0)) return false;
+        // A triangle facing the way the surface's normals at its corners do (towards f > 0)
+        // keeps doing so: coarse collapses must not turn a triangle inside out against the
+        // surface, even where it does not flip against its old self.
+        if (glm::dot(n0, surface_before) > 0.0 && !(glm::dot(n1, surface_after) > 0.0))
+            return false;
     }
     return true;
+}
+
+glm::dvec3 CollapseMesh::corner_normals(const Triangle& corners) const {
+    if (mesh_.normals.empty()) return glm::dvec3(0.0);
+    return mesh_.normals[corners[0]] + mesh_.normals[corners[1]] + mesh_.normals[corners[2]];
 }
 
 double CollapseMesh::quality_after_collapse(std::uint32_t v, std::uint32_t u) const {
@@ -166,11 +178,13 @@ void CollapseMesh::compact() {
         new_index[v] = next;
         mesh_.positions[next] = mesh_.positions[v];
         if (!mesh_.normals.empty()) mesh_.normals[next] = mesh_.normals[v];
+        if (!mesh_.gradient_norms.empty()) mesh_.gradient_norms[next] = mesh_.gradient_norms[v];
         incident_[next] = std::move(incident_[v]);
         ++next;
     }
     mesh_.positions.resize(next);
     if (!mesh_.normals.empty()) mesh_.normals.resize(next);
+    if (!mesh_.gradient_norms.empty()) mesh_.gradient_norms.resize(next);
     incident_.resize(next);
     std::vector<std::uint32_t> new_triangle(mesh_.triangles.size(), kDead);
     std::size_t kept = 0;

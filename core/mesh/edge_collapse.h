@@ -73,6 +73,9 @@ class CollapseMesh {
     void compact();
 
   private:
+    /// The sum of the normals at `corners` (zero when the mesh has none).
+    glm::dvec3 corner_normals(const Triangle& corners) const;
+
     Mesh& mesh_;
     std::span<const std::uint8_t> box_faces_;
     std::vector<std::vector<std::uint32_t>> incident_;

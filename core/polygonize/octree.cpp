@@ -81,8 +81,10 @@ class CellClassifier {
             std::size_t end = done + 1;
             while (end < cells.size() && cells[end].parent() == cells[done].parent()) ++end;
             if (cells[done].depth > 0) walk_to(cells[done].parent());
-            classify_siblings(cells.subspan(done, end - done), out.subspan(done, end - done));
-            done = end;
+            const std::size_t classified = classify_siblings(
+                cells.subspan(done, end - done), out.subspan(done, end - done), budget);
+            done += classified;
+            if (done < end) break;
         }
         return done;
     }
@@ -97,18 +99,25 @@ class CellClassifier {
     CornerCache& corners() { return corners_; }
 
   private:
-    void classify_siblings(std::span<const CellId> cells, std::span<CellOutcome> out) {
+    /// The siblings' enclosures in one batch, then each one's outcome; stops (returning how many
+    /// were classified, at least one) when the budget is exhausted.
+    std::size_t classify_siblings(std::span<const CellId> cells, std::span<CellOutcome> out,
+                                  const WorkBudget& budget) {
         boxes_.clear();
         for (const CellId& cell : cells) boxes_.push_back(lattice_.cell_box(cell));
         if (cells.front().depth < settings_.min_depth) {
             values_.resize(cells.size());
             evaluator_.intervals(boxes_, values_);
             for (std::size_t i = 0; i < cells.size(); ++i) out[i] = coarse_outcome(values_[i]);
-            return;
+            return cells.size();
         }
         enclosures_.resize(cells.size());
         evaluator_.interval_gradients(boxes_, enclosures_);
-        for (std::size_t i = 0; i < cells.size(); ++i) out[i] = outcome(cells[i], enclosures_[i]);
+        for (std::size_t i = 0; i < cells.size(); ++i) {
+            if (i > 0 && budget.exhausted()) return i;
+            out[i] = outcome(cells[i], enclosures_[i]);
+        }
+        return cells.size();
     }
 
     static CellOutcome coarse_outcome(const IntervalValue& value) {
@@ -310,9 +319,10 @@ namespace {
 
 /// Depth-first classification of a subtree (split_settled).
 void classify_subtree(Evaluator& evaluator, CellClassifier& classifier, const Lattice& lattice,
-                      const CellId& cell, std::vector<FrontierCell>& out) {
+                      const CellId& cell, std::vector<FrontierCell>& out,
+                      const WorkBudget& budget) {
     evaluator.push(lattice.cell_box(cell));
-    for (int octant = 0; octant < 8; ++octant) {
+    for (int octant = 0; octant < 8 && !budget.cancelled(); ++octant) {
         const CellId child = cell.child(octant);
         switch (classifier.classify_one(child)) {
             case CellOutcome::Empty:
@@ -325,7 +335,7 @@ void classify_subtree(Evaluator& evaluator, CellClassifier& classifier, const La
                 out.push_back({child, CellState::Unresolved});
                 break;
             case CellOutcome::Split:
-                classify_subtree(evaluator, classifier, lattice, child, out);
+                classify_subtree(evaluator, classifier, lattice, child, out, budget);
                 break;
         }
     }
@@ -336,12 +346,13 @@ void classify_subtree(Evaluator& evaluator, CellClassifier& classifier, const La
 
 std::vector<FrontierCell> split_settled(Evaluator& evaluator, const Lattice& lattice,
                                         const OctreeSettings& settings, const CellId& cell,
-                                        const ValueMap& known, ValueMap& evaluated) {
+                                        const ValueMap& known, ValueMap& evaluated,
+                                        const WorkBudget& budget) {
     assert(cell.depth < lattice.max_depth());
     std::vector<FrontierCell> out;
     {
         CellClassifier classifier(evaluator, lattice, settings, &known);
-        classify_subtree(evaluator, classifier, lattice, cell, out);
+        classify_subtree(evaluator, classifier, lattice, cell, out, budget);
         for (auto& [key, value] : classifier.corners().values()) evaluated.emplace(key, value);
     }
     return out;

@@ -171,12 +171,15 @@ void locate_crossings(EvaluatorPool& workers, const Lattice& lattice,
 
 /// Replaces each cell of `which` (a subsequence of `frontier`'s cells) by its subtree, keeping
 /// the octree order: a pending cell by its 8 children, pending too; a settled cell by the leaves
-/// of its classified subtree (split_settled). The new cells are appended to `added`.
+/// of its classified subtree (split_settled), or, in a mesh of an unfinished octree (`preview`),
+/// by its 8 children as pending cells too (classifying a subtree there could cost more than the
+/// whole octree so far). The new cells are appended to `added`.
 std::vector<FrontierCell> split_cells(EvaluatorPool& workers, const Lattice& lattice,
                                       const OctreeSettings& settings,
                                       const std::vector<FrontierCell>& frontier,
-                                      const std::vector<CellId>& which, ValueMap& values,
-                                      std::vector<CellId>& added, const WorkBudget& budget) {
+                                      const std::vector<CellId>& which, bool preview,
+                                      ValueMap& values, std::vector<CellId>& added,
+                                      const WorkBudget& budget) {
     std::vector<std::vector<FrontierCell>> subtrees(which.size());
     std::vector<ValueMap> evaluated(which.size());
     std::size_t next = 0;
@@ -186,12 +189,12 @@ std::vector<FrontierCell> split_cells(EvaluatorPool& workers, const Lattice& lat
     }
     workers.for_each(which.size(), [&](std::size_t i, CountingEvaluator& evaluator) {
         if (budget.cancelled()) return;
-        if (states[i] == CellState::Pending) {
+        if (states[i] == CellState::Pending || preview) {
             for (int octant = 0; octant < 8; ++octant)
                 subtrees[i].push_back({which[i].child(octant), CellState::Pending});
         } else {
-            subtrees[i] =
-                split_settled(evaluator, lattice, settings, which[i], values, evaluated[i]);
+            subtrees[i] = split_settled(evaluator, lattice, settings, which[i], values,
+                                        evaluated[i], budget);
         }
     });
     std::vector<FrontierCell> result;
@@ -268,6 +271,8 @@ Mesh assemble(const CrossingRoots& crossings, const std::vector<LeafMeshes>& par
         id[i] = static_cast<std::uint32_t>(mesh.positions.size());
         mesh.positions.push_back(crossings.roots[i].position);
         mesh.normals.push_back(unit_or_zero(crossings.roots[i].gradient));
+        const double norm = glm::length(crossings.roots[i].gradient);
+        mesh.gradient_norms.push_back(std::isfinite(norm) ? norm : 0.0);
     }
     for (const LeafMeshes& part : parts) {
         const auto offset = static_cast<std::uint32_t>(mesh.positions.size());
@@ -289,6 +294,8 @@ Mesh assemble(const CrossingRoots& crossings, const std::vector<LeafMeshes>& par
                               part.extra_positions.end());
         mesh.normals.insert(mesh.normals.end(), part.extra_normals.begin(),
                             part.extra_normals.end());
+        mesh.gradient_norms.insert(mesh.gradient_norms.end(), part.extra_gradient_norms.begin(),
+                                   part.extra_gradient_norms.end());
     }
     return mesh;
 }
@@ -318,6 +325,9 @@ class FrontierMesher {
 
     PolygonizeResult run(std::vector<FrontierCell> frontier) {
         frontier_ = std::move(frontier);
+        preview_ = std::any_of(frontier_.begin(), frontier_.end(), [](const FrontierCell& f) {
+            return f.state == CellState::Pending;
+        });
         leaves_ = cells_of(frontier_);
         finest_ = deepest(frontier_);
         fresh_ = leaves_;
@@ -353,6 +363,7 @@ class FrontierMesher {
         std::vector<LeafMeshes> parts;
         while (!budget_.cancelled()) {
             evaluate_corners(workers_, lattice_, fresh_, values_, budget_);
+            if (budget_.cancelled()) break;  // corners are missing: nothing below may run
             fresh_.clear();
             const LeafIndex index(leaves_);
             const LeafMeshingInput input{lattice_, values_, crossings_, index};
@@ -363,6 +374,7 @@ class FrontierMesher {
                 continue;
             }
             locate_crossings(workers_, lattice_, unlocated_, finest_, values_, crossings_, budget_);
+            if (budget_.cancelled()) break;
             unlocated_.clear();
             parts.assign(task_count(leaves_.size(), kCellsPerTask), {});
             workers_.for_each(parts.size(), [&](std::size_t task, CountingEvaluator& evaluator) {
@@ -374,7 +386,7 @@ class FrontierMesher {
             for (const LeafMeshes& part : parts) {
                 unmatched.insert(unmatched.end(), part.unmatched.begin(), part.unmatched.end());
             }
-            if (unmatched.empty()) break;
+            if (unmatched.empty() || budget_.cancelled()) break;
             split(unmatched);
         }
         return parts;
@@ -382,8 +394,8 @@ class FrontierMesher {
 
     void split(const std::vector<CellId>& which) {
         const std::size_t before = fresh_.size();
-        frontier_ =
-            split_cells(workers_, lattice_, settings_, frontier_, which, values_, fresh_, budget_);
+        frontier_ = split_cells(workers_, lattice_, settings_, frontier_, which, preview_, values_,
+                                fresh_, budget_);
         leaves_ = cells_of(frontier_);
         const int finest = deepest(frontier_);
         if (finest != finest_) {
@@ -402,6 +414,7 @@ class FrontierMesher {
     ValueMap& values_;
     const WorkBudget& budget_;
     std::vector<FrontierCell> frontier_;
+    bool preview_ = false;  // some cell is pending: the octree is unfinished
     std::vector<CellId> leaves_;
     int finest_ = 0;
     std::unordered_map<std::uint64_t, CrossingKey> crossings_;

@@ -129,6 +129,7 @@ void Refiner::Impl::load(const Mesh& input) {
         bounds_.lo = glm::min(bounds_.lo, mesh.positions[v]);
         bounds_.hi = glm::max(bounds_.hi, mesh.positions[v]);
     }
+    const std::vector<ValueGradient> gradients = missing_gradients(mesh);
     for (std::uint32_t v = 0; v < mesh.positions.size(); ++v) {
         if (slot_of[v] == kNone) continue;
         const std::uint32_t slot = vertices_.allocate();
@@ -136,10 +137,14 @@ void Refiner::Impl::load(const Mesh& input) {
         Vertex& V = vertices_[slot];
         V.id = next_vertex_id_++;
         V.position = mesh.positions[v];
-        const glm::dvec3 gradient = evaluator_->value_gradient(V.position).gradient;
         V.normal = mesh.normals.empty() ? glm::dvec3(0.0) : mesh.normals[v];
-        if (V.normal == glm::dvec3(0.0) || !finite(V.normal)) V.normal = unit_or_zero(gradient);
-        V.gradient_norm = finite(gradient) ? glm::length(gradient) : 0.0;
+        if (gradients.empty()) {
+            V.gradient_norm = mesh.gradient_norms[v];
+        } else {
+            const glm::dvec3& gradient = gradients[v].gradient;
+            if (V.normal == glm::dvec3(0.0) || !finite(V.normal)) V.normal = unit_or_zero(gradient);
+            V.gradient_norm = finite(gradient) ? glm::length(gradient) : 0.0;
+        }
         V.scale = std::numeric_limits<double>::infinity();
         V.version = version_;
         V.alive = true;
@@ -176,6 +181,26 @@ void Refiner::Impl::load(const Mesh& input) {
     root_edge_length_ = mesh.triangles.empty() ? 0.0 : edge_sum / (3.0 * mesh.triangles.size());
     ensure_errors(tri_slot);
     for (std::uint32_t slot : tri_slot) add_leaf(slot);
+}
+
+std::vector<ValueGradient> Refiner::Impl::missing_gradients(const Mesh& mesh) {
+    // Phase 1 found every vertex with the gradient: nothing to evaluate when it passed on the
+    // norms and every normal.
+    const bool known =
+        mesh.gradient_norms.size() == mesh.positions.size() &&
+        mesh.normals.size() == mesh.positions.size() &&
+        std::all_of(mesh.normals.begin(), mesh.normals.end(),
+                    [](const glm::dvec3& n) { return n != glm::dvec3(0.0) && finite(n); });
+    if (known) return {};
+    std::vector<double> x, y, z;
+    for (std::uint32_t v = 0; v < mesh.positions.size(); ++v) {
+        x.push_back(mesh.positions[v].x);
+        y.push_back(mesh.positions[v].y);
+        z.push_back(mesh.positions[v].z);
+    }
+    std::vector<ValueGradient> gradients(mesh.positions.size());
+    evaluator_->value_gradients({x, y, z}, gradients);
+    return gradients;
 }
 
 void Refiner::Impl::clear_all_into_delta() {

@@ -178,6 +178,9 @@ class Refiner::Impl {
   private:
     // --- structure
     void load(const Mesh& input);
+    /// grad f at the vertices of `mesh`, in one batch; empty when the mesh brought every norm
+    /// and normal along.
+    std::vector<ValueGradient> missing_gradients(const Mesh& mesh);
     void clear_all_into_delta();
     DeltaTriangle delta_triangle(std::uint32_t t) const;
     DeltaVertex delta_vertex(std::uint32_t v) const;
