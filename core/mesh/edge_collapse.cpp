@@ -114,9 +114,8 @@ bool CollapseMesh::can_collapse(std::uint32_t v, std::uint32_t u) const {
         const glm::dvec3 n0 = glm::cross(before[1] - before[0], before[2] - before[0]);
         const glm::dvec3 n1 = glm::cross(after[1] - after[0], after[2] - after[0]);
         const glm::dvec3 surface_before = corner_normals(tri);
-        const glm::dvec3 surface_after =
-            corner_normals({tri[0] == v ? u : tri[0], tri[1] == v ? u : tri[1],
-                            tri[2] == v ? u : tri[2]});
+        const glm::dvec3 surface_after = corner_normals(
+            {tri[0] == v ? u : tri[0], tri[1] == v ? u : tri[1], tri[2] == v ? u : tri[2]});
         if (!(glm::dot(was_degenerate ? surface_before : n0, n1) > 0.0)) return false;
         // A triangle facing the way the surface's normals at its corners do (towards f > 0)
         // keeps doing so: coarse collapses must not turn a triangle inside out against the

@@ -65,6 +65,7 @@ Pipeline::Pipeline(std::shared_ptr<const Field> field, PipelineSettings settings
         throw std::invalid_argument("Pipeline: first_mesh_share must be in (0, 1]");
     settings_.phase1.cancel = nullptr;
     settings_.refine.cancel = nullptr;
+    settings_.refine.box = settings_.phase1.box;
     phase1_ = std::make_unique<Polygonizer>(field_, settings_.phase1);
 }
 

@@ -121,8 +121,10 @@ void Refiner::Impl::refresh_leaves(std::span<const std::uint32_t> items) {
         const std::uint32_t t = items[i];
         const double error = triangles_[t].error;
         total_error_.add(error - old_errors[i]);
-        PriorityQueue& queue = split_queue_->contains(t) ? *split_queue_ : *blocked_queue_;
-        queue.update(t, error);
+        // A split refused for the old function (no vertex for it) may be possible now.
+        if (split_queue_->contains(t)) split_queue_->remove(t);
+        if (blocked_queue_->contains(t)) blocked_queue_->remove(t);
+        (splittable(t) ? *split_queue_ : *blocked_queue_).insert(t, error);
     }
     counters_.refreshed_triangles += items.size();
 }

@@ -38,6 +38,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <utility>
@@ -76,6 +77,11 @@ struct RefineSettings {
     /// A bound on forced splits per split (never reached on meshes whose base edges are longest
     /// edges; a guard against malformed input).
     std::size_t max_forced_chain = 4096;
+    /// The meshing box: a split whose new vertex would land outside it (the surface bulging out
+    /// past a face the mesh ends on) is not made, nor one whose projection onto the surface
+    /// fails; the triangle stays as it is until the function changes. Infinite by default.
+    Box box{glm::dvec3(-std::numeric_limits<double>::infinity()),
+            glm::dvec3(std::numeric_limits<double>::infinity())};
     /// Checked between operations; step() returns early when it becomes true.
     const std::atomic<bool>* cancel = nullptr;
 };
@@ -110,8 +116,9 @@ struct RefineCounters {
     std::size_t swaps = 0;
     std::size_t refreshed_vertices = 0;
     std::size_t refreshed_triangles = 0;
-    std::size_t failed_projections = 0;  // split vertices left at the edge midpoint
-    std::size_t failed_refreshes = 0;    // vertices that found no surface nearby after set_field
+    std::size_t refused_vertices = 0;  // splits refused: no valid vertex (on the surface, in the
+                                       // box, folding nothing) for them
+    std::size_t failed_refreshes = 0;  // vertices that found no surface nearby after set_field
     std::size_t restarts = 0;
     std::size_t refused_splits = 0;  // chains longer than max_forced_chain
 };

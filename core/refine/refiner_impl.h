@@ -51,6 +51,7 @@ struct Triangle {
     glm::dvec3 candidate_normal{0.0};
     double candidate_gradient_norm = 0.0;
     bool candidate_on_surface = false;
+    bool candidate_refused = false;  // no valid split vertex at candidate_version: not split
     std::uint64_t candidate_version = 0;
     double error = 0.0;
     std::uint64_t error_version = 0;
@@ -194,6 +195,8 @@ class Refiner::Impl {
     /// Splittable: every edge at least min_edge_length. Splitting a triangle with a shorter edge
     /// (coincident vertices in the input) would only make more degenerate triangles.
     bool splittable(std::uint32_t t) const {
+        const Triangle& T = triangles_[t];
+        if (T.candidate_refused && T.candidate_version == version_) return false;
         for (int e = 0; e < 3; ++e)
             if (!(glm::length(position(t, e + 1) - position(t, e)) >= settings_.min_edge_length))
                 return false;
@@ -222,6 +225,11 @@ class Refiner::Impl {
 
     // --- operations
     bool plan_split(std::uint32_t t, SplitPlan& plan);
+    /// Projects the split vertices of the plan; false (and the triangles without one moved to
+    /// the blocked queue) when some has none on the surface inside the box.
+    bool prepare(const SplitPlan& plan);
+    /// Bisecting t's base edge at m would flip a child against t, or make one of zero area.
+    bool folds(std::uint32_t t, const glm::dvec3& m) const;
     void execute(const SplitPlan& plan);
     void bisect(std::uint32_t t, std::uint32_t partner);
     std::uint32_t make_child(std::uint32_t record, std::array<std::uint32_t, 3> v,
