@@ -3,9 +3,11 @@
 // stays on 127.0.0.1 (the viewer works without internet access), and helpers that read the
 // viewer's state (window.isomesh) and save screenshots to build/test-artifacts/web/.
 
+import assert from 'node:assert/strict';
 import { mkdirSync, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
+import { after, before } from 'node:test';
 
 import { chromium } from 'playwright-core';
 
@@ -64,6 +66,25 @@ export async function openViewer(name, { viewport = { width: 1280, height: 800 }
     return { code, signal };
   };
   return { server, context, page, pageErrors, offHostRequests, close };
+}
+
+/**
+ * A test file's viewer: opened before its tests, closed after them (the server must exit
+ * cleanly). Returns an object that holds openViewer's fields once the tests run; `onOpen(viewer)`
+ * runs in the same hook (node:test runs a file's top-level `before` hooks concurrently).
+ */
+export function viewerForTests(name, options = {}, onOpen = () => {}) {
+  const viewer = {};
+  before(async () => {
+    Object.assign(viewer, await openViewer(name, options));
+    onOpen(viewer);
+  });
+  after(async () => {
+    if (!viewer.close) return;
+    const { code, signal } = await viewer.close();
+    assert.ok(code === 0 || signal === 'SIGTERM', `server ended with ${code ?? signal}`);
+  });
+  return viewer;
 }
 
 /** Resolves with the viewer's snapshot once `predicate(snapshot, arg)` holds (evaluated in the page). */

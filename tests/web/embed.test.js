@@ -5,24 +5,13 @@
 import assert from 'node:assert/strict';
 import { writeFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { after, before, test } from 'node:test';
+import { test } from 'node:test';
 
-import { ARTIFACTS, WAIT_MS, openViewer } from './browser.js';
+import { ARTIFACTS, WAIT_MS, viewerForTests } from './browser.js';
 import { coloredFraction } from './pixels.js';
 
-let viewer;
 let page;
-
-before(async () => {
-  viewer = await openViewer('embed');
-  page = viewer.page;
-});
-
-after(async () => {
-  if (!viewer) return;
-  const { code, signal } = await viewer.close();
-  assert.ok(code === 0 || signal === 'SIGTERM', `server ended with ${code ?? signal}`);
-});
+const viewer = viewerForTests('embed', {}, (v) => (page = v.page));
 
 /** The element's snapshot once it has converged with `parameters` (all of them). */
 async function converged(id, parameters = {}) {

@@ -3,25 +3,14 @@
 // build/test-artifacts/web/.
 
 import assert from 'node:assert/strict';
-import { after, before, test } from 'node:test';
+import { test } from 'node:test';
 
-import { canvasShot, convergedOn, openViewer, typeEquation, waitForSnapshot } from './browser.js';
+import { canvasShot, convergedOn, typeEquation, viewerForTests, waitForSnapshot } from './browser.js';
 import { coloredFraction } from './pixels.js';
 
 const PHONE = { width: 390, height: 844 };
-let viewer;
 let page;
-
-before(async () => {
-  viewer = await openViewer('layout', { viewport: PHONE });
-  page = viewer.page;
-});
-
-after(async () => {
-  if (!viewer) return;
-  const { code, signal } = await viewer.close();
-  assert.ok(code === 0 || signal === 'SIGTERM', `server ended with ${code ?? signal}`);
-});
+const viewer = viewerForTests('layout', { viewport: PHONE }, (v) => (page = v.page));
 
 const box = (locator) => locator.boundingBox();
 

@@ -8,24 +8,13 @@
 import assert from 'node:assert/strict';
 import { writeFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { after, before, test } from 'node:test';
+import { test } from 'node:test';
 
-import { ARTIFACTS, canvasShot, convergedOn, openViewer, statusTriangles, waitForSnapshot } from './browser.js';
+import { ARTIFACTS, canvasShot, convergedOn, statusTriangles, viewerForTests, waitForSnapshot } from './browser.js';
 
 const BUDGET = 200000;
-let viewer;
 let page;
-
-before(async () => {
-  viewer = await openViewer('streaming');
-  page = viewer.page;
-});
-
-after(async () => {
-  if (!viewer) return;
-  const { code, signal } = await viewer.close();
-  assert.ok(code === 0 || signal === 'SIGTERM', `server ended with ${code ?? signal}`);
-});
+const viewer = viewerForTests('streaming', {}, (v) => (page = v.page));
 
 function percentile(sorted, p) {
   return sorted[Math.min(sorted.length - 1, Math.floor(p * sorted.length))];
@@ -117,8 +106,7 @@ test(`frame intervals while a ${BUDGET}-triangle refinement streams (reported)`,
   const line = Object.entries(figures)
     .map(([k, v]) => `${k} ${Number.isInteger(v) ? v : v.toFixed(1)}`)
     .join(', ');
-  t.diagnostic(line);
-  console.log(`# streaming ${BUDGET} triangles: ${line}`);
+  t.diagnostic(`streaming ${BUDGET} triangles: ${line}`);
   writeFileSync(join(ARTIFACTS, 'streaming-frames.json'), JSON.stringify({ figures, intervals: record.intervals }, null, 1));
   await canvasShot(page, 'streaming-200k');
 
@@ -128,7 +116,7 @@ test(`frame intervals while a ${BUDGET}-triangle refinement streams (reported)`,
   assert.ok(sorted.length > 10, 'the page kept drawing while frames streamed');
 });
 
-test('a hidden page (no animation frames) still applies every frame, a slice at a time', async () => {
+test('a hidden page (no animation frames) still applies every frame, a slice at a time', async (t) => {
   await page.evaluate(() => {
     // As a hidden tab: no drawing, so frames are left to the pump's background loop.
     window.isomesh.viewer.hooks.beforeRender = () => false;
@@ -140,7 +128,7 @@ test('a hidden page (no animation frames) still applies every frame, a slice at 
   const held = await page.evaluate(() => window.isomesh.meshSignature().triangles);
   assert.equal(held, s.triangles, 'every frame applied without animation frames');
   const slice = await page.evaluate(() => window.isomesh.longestFrameSliceMs());
-  console.log(`# hidden page: ${s.triangles} triangles, longest slice ${slice.toFixed(1)} ms`);
+  t.diagnostic(`hidden page: ${s.triangles} triangles, longest slice ${slice.toFixed(1)} ms`);
   await page.evaluate(() => {
     delete document.visibilityState;
   });

@@ -7,27 +7,16 @@
 
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
-import { after, before, test } from 'node:test';
+import { test } from 'node:test';
 
 import validator from 'gltf-validator';
 import { PNG } from 'pngjs';
 
-import { ARTIFACTS, WAIT_MS, canvasShot, convergedOn, openViewer, snapshot, statusTriangles, typeEquation, waitForSnapshot } from './browser.js';
+import { ARTIFACTS, WAIT_MS, canvasShot, convergedOn, snapshot, statusTriangles, typeEquation, viewerForTests, waitForSnapshot } from './browser.js';
 import { coloredFraction, differingFraction } from './pixels.js';
 
-let viewer;
 let page;
-
-before(async () => {
-  viewer = await openViewer('viewer');
-  page = viewer.page;
-});
-
-after(async () => {
-  if (!viewer) return;
-  const { code, signal } = await viewer.close();
-  assert.ok(code === 0 || signal === 'SIGTERM', `server ended with ${code ?? signal}`);
-});
+const viewer = viewerForTests('viewer', {}, (v) => (page = v.page));
 
 const slider = (name) => page.getByRole('slider', { name, exact: true });
 const button = (name) => page.getByRole('button', { name, exact: true });

@@ -8,10 +8,9 @@ import { connect } from 'isomesh-client';
 
 import { NO_SURFACE_MESSAGE, EMPTY_MESSAGE, prepareEquation } from './equation_check.js';
 import { parameterNames } from './parameters.js';
-import { Surface } from './surface.js';
+import { RECONNECT_MS, Surface } from './surface.js';
 import { MAX_SURFACES } from './url_state.js';
 
-const RECONNECT_MS = [500, 1000, 2000, 5000, 10000];
 export const PALETTE = ['#3d7fd6', '#d9553d', '#3f9e4d', '#8e5bd0', '#1f9fa5', '#c98a1b', '#d6457e', '#5f6b7a'];
 const STATUS_ORDER = ['disconnected', 'connecting', 'meshing', 'refining', 'paused', 'converged'];
 

@@ -21,13 +21,12 @@ import dracoWasmUrl from 'draco3d/draco_decoder.wasm?url';
 import { prepareEquation } from './equation_check.js';
 import { parameterAttributes } from './parameters.js';
 import { FramePump } from './frame_pump.js';
-import { Surface } from './surface.js';
+import { RECONNECT_MS, Surface } from './surface.js';
 import { validBox } from './url_state.js';
 import { DARK_THEME, LIGHT_THEME, Viewer } from './viewer.js';
 
 const DEFAULT_BOX = [-3, 3, -3, 3, -3, 3];
 const OWN_ATTRIBUTES = new Set(['equation', 'parameters', 'box', 'budget', 'color', 'colormode', 'axes', 'grid', 'status', 'server']);
-const RECONNECT_MS = [500, 1000, 2000, 5000, 10000];
 
 let decoderPromise = null;
 const sharedDecoder = () => (decoderPromise ??= loadDracoDecoder({ locateFile: () => dracoWasmUrl }));

@@ -13,6 +13,8 @@
 import { missingParameters, parameterNames, valuesFor } from './parameters.js';
 
 export const NEXT_UPDATE_WAIT_MS = 250;
+/** Delays before reconnecting after a lost connection: the 1st, 2nd... attempt (then the last). */
+export const RECONNECT_MS = [500, 1000, 2000, 5000, 10000];
 
 /** What a row's progress line says, from the surface's state. */
 export const SURFACE_STATES = ['empty', 'error', 'connecting', 'meshing', 'refining', 'converged', 'paused'];
