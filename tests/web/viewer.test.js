@@ -55,7 +55,7 @@ test('typing an equation with a parameter meshes it and makes a slider named aft
   sphere = { pixels, snapshot: s, signature: await page.evaluate(() => window.isomesh.meshSignature()) };
 });
 
-test('a mouse drag of the slider moves the surface at every step the server can follow', async () => {
+test('a mouse drag of the slider moves the surface at every step the server can follow', async (t) => {
   const before = await snapshot(page);
   const shownBefore = before.surfaces[0].versionsShown;
   await page.evaluate(() => {
@@ -78,6 +78,7 @@ test('a mouse drag of the slider moves the surface at every step the server can 
   const value = Number(await slider('a').inputValue());
   const s = await waitForSnapshot(page, convergedOn, { expression: 'x^2+y^2+z^2=a', parameters: { a: value } });
   const moves = s.surfaces[0].versionsShown - shownBefore;
+  t.diagnostic(`${steps}-step drag: ${inputs} input events, the surface moved ${moves} times, a = ${value}`);
   assert.ok(inputs >= 20, `${inputs} input events from a ${steps}-step drag`);
   assert.ok(Math.abs(value - 4) < 0.25, `the thumb followed the mouse to a = ${value}`);
   assert.ok(moves >= 10, `the surface moved ${moves} times during the drag (journal: ${JSON.stringify(await page.evaluate(() => window.isomesh.journal()[0].slice(-40)))})`);

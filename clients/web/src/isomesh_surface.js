@@ -87,6 +87,10 @@ export class IsomeshSurfaceElement extends HTMLElement {
       shared: () => ({ parameters: this.#parameters(), box: this.#box(), constraints: this.#constraints() }),
       onChange: (surface, what) => this.#changed(what),
     });
+    const pump = new FramePump({ drain: (deadline) => this.client?.drainFrames(deadline), pending: () => this.client?.pendingFrames ?? 0 });
+    this.viewer.hooks.beforeRender = () => pump.onAnimationFrame();
+    this.onVisibility = () => pump.visibilityChanged();
+    document.addEventListener('visibilitychange', this.onVisibility);
     this.observer = new MutationObserver(() => this.#attributesChanged());
     this.observer.observe(this, { attributes: true });
     this.#attributesChanged();
@@ -96,6 +100,7 @@ export class IsomeshSurfaceElement extends HTMLElement {
   disconnectedCallback() {
     this.gone = true;
     this.observer?.disconnect();
+    document.removeEventListener('visibilitychange', this.onVisibility);
     this.surface?.close();
     this.client?.close();
     this.viewer?.dispose();
@@ -118,9 +123,6 @@ export class IsomeshSurfaceElement extends HTMLElement {
       }
       this.client = client;
       this.reconnects = 0;
-      const pump = new FramePump({ drain: (deadline) => client.drainFrames(deadline), pending: () => client.pendingFrames });
-      this.viewer.hooks.beforeRender = () => pump.onAnimationFrame();
-      document.addEventListener('visibilitychange', () => pump.visibilityChanged());
       client.on('close', () => this.#lost('connection closed'));
       this.surface.attach(client);
     } catch (error) {

@@ -193,8 +193,24 @@ export class Surface {
     if (this.paused) session.pause().catch(() => {});
     this.onChange(this, 'session');
     this.onChange(this, 'state');
-    if (this.expression !== expression) this.#change({ expression: this.expression }); // edited meanwhile
+    this.#catchUp(expression);
     this.#pump();
+  }
+
+  /** Sends what changed while the session was being created (an edit, a slider moved). */
+  #catchUp(expression) {
+    const now = this.shared();
+    const state = this.session.state;
+    const fields = {};
+    if (this.expression !== expression) fields.expression = this.expression;
+    const parameters = Object.fromEntries(
+      Object.entries(state.parameters).filter(([name, value]) => name in now.parameters && now.parameters[name] !== value).map(([name]) => [name, now.parameters[name]]),
+    );
+    if (Object.keys(parameters).length > 0) fields.parameters = parameters;
+    if (now.box.some((v, i) => v !== state.box[i])) fields.box = now.box;
+    const constraints = Object.fromEntries(Object.entries(now.constraints).filter(([key, value]) => value !== undefined && value !== state.constraints?.[key]));
+    if (Object.keys(constraints).length > 0) fields.constraints = constraints;
+    if (Object.keys(fields).length > 0) this.#change(fields);
   }
 
   #note(entry) {

@@ -133,6 +133,23 @@ test('Surface: create retries once with the parameters the server says are missi
   assert.ok(surface.session);
 });
 
+test('Surface: a slider moved while the session is being created is sent once it exists', async () => {
+  const client = fakeClient();
+  const values = { a: 1 };
+  const surface = new Surface({ expression: 'x=a', shared: () => ({ parameters: values, box: [-1, 1, -1, 1, -1, 1], constraints: {} }) });
+  surface.attach(client); // create sent with a = 1
+  values.a = 2;
+  surface.setParameters({ a: 2 });
+  await tick();
+  const session = client.sessions[0];
+  assert.deepEqual(client.creates[0].parameters, { a: 1 });
+  assert.deepEqual(
+    session.requests.map((r) => r.fields),
+    [{ parameters: { a: 2 } }],
+    'one update with the value the slider has now',
+  );
+});
+
 test('Surface: status follows the session, and a converged empty version is reported empty', async () => {
   const client = fakeClient();
   const surface = new Surface({ shared: shared() });
