@@ -319,12 +319,10 @@ bool MeshSession::refine_turn(Inbox& inbox) {
     services_.metrics.splits.add(step.splits);
     services_.metrics.merges.add(step.merges);
     splits_since_progress_ += step.splits;
-    if (step.cancelled) return true;  // a new version or a close waits in the inbox
-
-    converged_ = step.converged;
+    // The step's changes are the mesh's, cancelled or not: the next frames build on them.
     if (step.restarted) {
         // Phase 1 resolved more of the topology: the whole mesh is replaced.
-        replace_mesh(inbox, current_.state.version, converged_);
+        replace_mesh(inbox, current_.state.version, step.converged && !step.cancelled);
     } else {
         gather(pending_, step.delta);
         const MeshDelta& d = step.delta;
@@ -332,6 +330,8 @@ bool MeshSession::refine_turn(Inbox& inbox) {
                             d.added_vertices.size() + d.moved_vertices.size() +
                             d.removed_vertices.size();
     }
+    if (step.cancelled) return true;  // a new version or a close waits in the inbox
+    converged_ = step.converged;
     if (pipeline_->field_change_pending()) {
         // A new version is half applied: a frame now would mix surfaces. The user is waiting for
         // it, so the next turn stays in the urgent lane (worker_pool.h).
