@@ -81,8 +81,11 @@ PipelineStep Pipeline::step(const WorkBudget& budget) {
         if (refiner_->field_change_pending())
             refine(out, {kAllOperations, budget.portion(kRefreshShare)});
         advance_phase1(budget);
+    } else if (shadow_) {
+        settle_version(out, budget);
     } else {
         refine(out, {kAllOperations, budget});
+        if (out.converged && canonical_pending_) settle_version(out, budget);
     }
     // Phase 1 just ended: refine with what the step has left, so that a mesh already meeting the
     // constraint leaves flagged converged.
@@ -121,6 +124,33 @@ PipelineStep Pipeline::run_to_convergence(const WorkBudget& budget) {
             return total;
         }
     }
+}
+
+void Pipeline::settle_version(PipelineStep& out, const WorkBudget& budget) {
+    out.converged = false;
+    if (!shadow_) {
+        RefineSettings settings = settings_.refine;
+        settings.first_vertex_id = refiner_->next_vertex_id();
+        settings.first_triangle_id = refiner_->next_triangle_id();
+        shadow_ = std::make_unique<Refiner>(field_, fit_to_budget(*installed_, budget), settings);
+    }
+    if (!shadow_->step({kAllOperations, budget}).converged) return;
+    // The swap: every triangle and vertex of the kept mesh out, the new version's own mesh in.
+    const MeshDelta old = refiner_->snapshot();
+    MeshDelta swap = shadow_->snapshot();
+    for (const DeltaTriangle& t : old.added_triangles) swap.removed_triangles.push_back(t.id);
+    for (const DeltaVertex& v : old.added_vertices) swap.removed_vertices.push_back(v.id);
+    retire_refiner();
+    refiner_ = std::move(shadow_);
+    canonical_pending_ = false;
+    out.delta = std::move(swap);
+    out.restarted = true;
+    out.converged = true;
+}
+
+void Pipeline::retire_refiner() {
+    retired_counters_ += refiner_->counters();
+    ++retired_counters_.restarts;  // the replacement
 }
 
 void Pipeline::first_mesh(const WorkBudget& budget) {
@@ -162,6 +192,8 @@ void Pipeline::finish_phase1(const WorkBudget& budget) {
     phase1_.reset();
     if (field_changing_ && keeps_moved_mesh(result.mesh)) {
         field_changing_ = false;
+        installed_ = std::move(result.mesh);  // refined aside once the moved mesh converged
+        canonical_pending_ = true;
         return;
     }
     field_changing_ = false;
@@ -201,6 +233,8 @@ Mesh Pipeline::fit_to_budget(Mesh mesh, const WorkBudget& budget) {
 
 void Pipeline::install(Mesh mesh, const WorkBudget& budget) {
     if (budget.cancelled()) return;
+    shadow_.reset();
+    canonical_pending_ = false;
     installed_ = mesh;
     Mesh root = fit_to_budget(std::move(mesh), budget);
     if (budget.cancelled()) return;
@@ -215,6 +249,8 @@ void Pipeline::set_field(std::shared_ptr<const Field> field) {
     if (!field) throw std::invalid_argument("Pipeline::set_field: null field");
     field_ = std::move(field);
     phase1_ = std::make_unique<Polygonizer>(field_, settings_.phase1);
+    shadow_.reset();
+    canonical_pending_ = false;
     classified_at_last_mesh_ = 0;
     status_.resolving = true;
     status_.certified = false;
@@ -227,6 +263,7 @@ void Pipeline::set_field(std::shared_ptr<const Field> field) {
 
 void Pipeline::set_constraint(Constraint constraint) {
     settings_.refine.constraint = std::move(constraint);
+    shadow_.reset();  // made again for the new constraint once the shown mesh converges
     if (!refiner_) return;
     refiner_->set_constraint(settings_.refine.constraint);
     // A budget below the phase-1 mesh's (simplified) triangles: simplify it again. (A higher one
@@ -248,8 +285,10 @@ MeshStats Pipeline::stats() const {
     return refiner_->stats();
 }
 
-const RefineCounters& Pipeline::counters() const {
-    return refiner_->counters();
+RefineCounters Pipeline::counters() const {
+    RefineCounters total = retired_counters_;
+    total += refiner_->counters();
+    return total;
 }
 
 RefinedMesh Pipeline::mesh() const {

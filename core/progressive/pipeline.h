@@ -20,7 +20,10 @@
 // slider's surface glides), while phase 1 runs again for the new function; when it is done, the
 // moved mesh is kept if it has the new surface's topology and no triangle folded over, otherwise
 // the new phase-1 mesh replaces it. A vertex that finds no surface in reach shows the new phase
-// 1's mesh as soon as it has one.
+// 1's mesh as soon as it has one. A kept mesh is refined until it converges; then the new phase-1
+// mesh is refined aside (no frames) and replaces it once converged, so that a version's final
+// mesh is the one a new pipeline makes of it, whatever came before (a server rebuilding a session
+// from its definition gets the same mesh).
 //
 // Determinism: the mesh once converged depends only on the function, the settings and the
 // sequence of calls, not on how budgets cut the work into steps, nor on the number of threads.
@@ -128,7 +131,8 @@ class Pipeline {
     const PipelineStatus& status() const { return status_; }
     /// Precondition for the views below: started().
     MeshStats stats() const;
-    const RefineCounters& counters() const;
+    /// Over every refiner the pipeline had (a replacement starts a new one).
+    RefineCounters counters() const;
     RefinedMesh mesh() const;
     MeshDelta snapshot() const;
     /// Statistics of the last phase-1 mesh made.
@@ -143,11 +147,17 @@ class Pipeline {
     Mesh fit_to_budget(Mesh mesh, const WorkBudget& budget);
     bool keeps_moved_mesh(const Mesh& fresh) const;
     void refine(PipelineStep& out, const StepBudget& budget);
+    void settle_version(PipelineStep& out, const WorkBudget& budget);
+    void retire_refiner();
 
     std::shared_ptr<const Field> field_;
     PipelineSettings settings_;
     std::unique_ptr<Polygonizer> phase1_;  // null once phase 1 is done
     std::unique_ptr<Refiner> refiner_;
+    // The new version's own phase-1 mesh refined aside while a kept moved mesh is shown.
+    std::unique_ptr<Refiner> shadow_;
+    bool canonical_pending_ = false;  // installed_ is to replace a kept moved mesh
+    RefineCounters retired_counters_;
     std::optional<Mesh> installed_;  // the last phase-1 mesh installed, before simplification
     std::size_t classified_at_last_mesh_ = 0;
     bool field_changing_ = false;  // set_field: phase 1 of the new function decides the topology

@@ -85,6 +85,19 @@ std::string topology_problem(const TopologyReport& report) {
 
 }  // namespace
 
+RefineCounters& operator+=(RefineCounters& total, const RefineCounters& more) {
+    total.splits += more.splits;
+    total.merges += more.merges;
+    total.swaps += more.swaps;
+    total.refreshed_vertices += more.refreshed_vertices;
+    total.refreshed_triangles += more.refreshed_triangles;
+    total.refused_vertices += more.refused_vertices;
+    total.failed_refreshes += more.failed_refreshes;
+    total.restarts += more.restarts;
+    total.refused_splits += more.refused_splits;
+    return total;
+}
+
 std::string validate_refinable(const Mesh& mesh) {
     const std::string problem = index_and_value_problem(mesh);
     return problem.empty() ? topology_problem(analyze_topology(mesh)) : problem;
@@ -99,6 +112,8 @@ Refiner::Impl::Impl(std::shared_ptr<const Field> field, const Mesh& first_mesh,
         throw std::invalid_argument("Refiner: swap_ratio must be > 1");
     field_ = std::move(field);
     evaluator_ = field_->make_evaluator();
+    next_vertex_id_ = settings_.first_vertex_id;
+    next_triangle_id_ = settings_.first_triangle_id;
     split_queue_ = make_queue(settings_.queue, QueueOrder::HighestFirst, settings_.buckets);
     blocked_queue_ = make_queue(settings_.queue, QueueOrder::HighestFirst, settings_.buckets);
     merge_queue_ = make_queue(settings_.queue, QueueOrder::LowestFirst, settings_.buckets);
@@ -383,6 +398,12 @@ bool Refiner::refresh_failed() const {
 }
 void Refiner::reset(const Mesh& first_mesh) {
     impl_->reset(first_mesh);
+}
+std::uint32_t Refiner::next_vertex_id() const {
+    return impl_->next_vertex_id();
+}
+std::uint32_t Refiner::next_triangle_id() const {
+    return impl_->next_triangle_id();
 }
 const TopologyReport& Refiner::root_topology() const {
     return impl_->root_topology();

@@ -77,6 +77,10 @@ struct RefineSettings {
     /// A bound on forced splits per split (never reached on meshes whose base edges are longest
     /// edges; a guard against malformed input).
     std::size_t max_forced_chain = 4096;
+    /// The first vertex and triangle ids this refiner gives (a refiner that takes over from
+    /// another one starts after that one's ids, so a client can hold both meshes' ids apart).
+    std::uint32_t first_vertex_id = 0;
+    std::uint32_t first_triangle_id = 0;
     /// The meshing box: a split whose new vertex would land outside it (the surface bulging out
     /// past a face the mesh ends on) is not made, nor one whose projection onto the surface
     /// fails; the triangle stays as it is until the function changes. Infinite by default.
@@ -122,6 +126,9 @@ struct RefineCounters {
     std::size_t restarts = 0;
     std::size_t refused_splits = 0;  // chains longer than max_forced_chain
 };
+
+/// Sums counters (of several refiners in turn).
+RefineCounters& operator+=(RefineCounters& total, const RefineCounters& more);
 
 /// The ends of the two queues: the largest split priority (splittable leaves) and the smallest
 /// merge priority (0 when a queue is empty). Converged under a triangle budget, the refiner leaves
@@ -180,6 +187,9 @@ class Refiner {
     /// version): the next step's delta removes every triangle and adds the new mesh, whose ids
     /// continue after the old ones. Throws std::invalid_argument when validate_refinable fails.
     void reset(const Mesh& first_mesh);
+    /// The ids the next new vertex and triangle will get.
+    std::uint32_t next_vertex_id() const;
+    std::uint32_t next_triangle_id() const;
     /// The topology of the current mesh: its phase-1 mesh's, which splits and merges keep.
     const TopologyReport& root_topology() const;
     /// Leaves facing against the surface: their geometric normal points away from the mean of

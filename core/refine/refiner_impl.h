@@ -166,6 +166,8 @@ class Refiner::Impl {
     bool refresh_failed() const { return refresh_failed_; }
     void reset(const Mesh& first_mesh);
     const TopologyReport& root_topology() const { return root_topology_; }
+    std::uint32_t next_vertex_id() const { return next_vertex_id_; }
+    std::uint32_t next_triangle_id() const { return next_triangle_id_; }
     std::size_t inverted_triangles() const;
     MeshStats stats() const;
     QueueEnds queue_ends() const {

@@ -120,6 +120,13 @@ void expect_valid_mesh(const Field& field, const Mesh& mesh, const Box& box, Bas
     EXPECT_EQ(inward, 0u) << "triangles facing f < 0";
 }
 
+Mesh without_adjacency(Mesh mesh) {
+    mesh.neighbours.clear();
+    mesh.base_edge.clear();
+    mesh.gradient_norms.clear();
+    return mesh;
+}
+
 void expect_identical(const Mesh& a, const Mesh& b) {
     ASSERT_EQ(a.positions.size(), b.positions.size());
     ASSERT_EQ(a.triangles.size(), b.triangles.size());

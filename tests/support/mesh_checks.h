@@ -37,4 +37,7 @@ void expect_valid_mesh(const Field& field, const Mesh& mesh, const Box& box,
 /// Expects two meshes to be identical, bit for bit.
 void expect_identical(const Mesh& a, const Mesh& b);
 
+/// Positions, normals and triangles only (a client's view, which has no adjacency).
+Mesh without_adjacency(Mesh mesh);
+
 }  // namespace isomesh::test
