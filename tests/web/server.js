@@ -22,7 +22,7 @@ export function startServer(extraArgs = [], { timeoutMs = 20000 } = {}) {
   for (const [what, path] of [['server binary', SERVER_BIN], ['web client (build/web/index.html)', join(WEB_ROOT, 'index.html')]]) {
     if (!existsSync(path)) throw new Error(`no ${what} at ${path}: run scripts/build.sh first`);
   }
-  const args = ['--bind', '127.0.0.1', '--port', '0', '--web-root', WEB_ROOT, '--threads', '2', ...extraArgs];
+  const args = ['--bind', '127.0.0.1', '--port', '0', '--web-root', WEB_ROOT, '--threads', '2', '--store', 'none', ...extraArgs];
   const child = spawn(SERVER_BIN, args, { stdio: ['ignore', 'pipe', 'pipe'] });
   const log = [];
   let onLine = () => {};
