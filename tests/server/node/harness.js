@@ -44,9 +44,10 @@ export async function until(predicate, { timeoutMs = 20000, everyMs = 10, what =
  * Starts isomesh-server with `args` added to the test defaults (sessions in memory only unless
  * `args` name a --store). Resolves with a handle:
  * {port, pid, wsUrl, httpUrl, log, stop(), kill(), metrics(), status()}.
+ * `env`: the server's environment; `bare`: no default arguments (configured by `env` alone).
  */
-export function startServer(args = [], { timeoutMs = 20000, env = process.env } = {}) {
-  const defaults = ['--bind', '127.0.0.1', '--port', '0', '--threads', '2', '--web-root', '', '--store', 'none'];
+export function startServer(args = [], { timeoutMs = 20000, env = process.env, bare = false } = {}) {
+  const defaults = bare ? [] : ['--bind', '127.0.0.1', '--port', '0', '--threads', '2', '--web-root', '', '--store', 'none'];
   const fullArgs = [];
   for (let i = 0; i < defaults.length; i += 2) {
     if (!args.includes(defaults[i])) fullArgs.push(defaults[i], defaults[i + 1]);
@@ -88,6 +89,10 @@ function serverHandle(child, port, log, exited) {
     wsUrl: `ws://127.0.0.1:${port}/ws`,
     log,
     exited,
+    /** True until the process exits. */
+    get alive() {
+      return child.exitCode === null && child.signalCode === null;
+    },
     /** SIGKILL (kill -9): no drain, nothing flushed; resolves once the process is gone. */
     async kill() {
       if (child.exitCode === null && child.signalCode === null) child.kill('SIGKILL');
