@@ -145,7 +145,7 @@ TEST(MeshService, late_joiner_and_creator_end_identical) {
     Fixture f;
     TestConnection a(f.service), b(f.service);
     const auto session = create(a, create_request("x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8=0", 20000));
-    ASSERT_TRUE(a.wait_for([&] { return a.frames.size() >= 2; }));  // refinement under way
+    ASSERT_TRUE(a.wait_for([&] { return a.frames.size() >= 2; }));           // refinement under way
     const std::uint64_t sequence_before_joining = a.frames.back().sequence;  // 1 or more
     protocol::Subscribe subscribe;
     subscribe.id = 7;
