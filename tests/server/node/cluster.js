@@ -4,8 +4,8 @@
 //
 // What changes from containers to loopback, and only that: service host names become 127.0.0.1,
 // ports become free loopback ports, Redis's working folder a temporary one, each server gets one
-// worker thread (the test machine has 2 cores for 3 servers) and no web root. Every process is
-// stopped by stop(); nothing is left running.
+// worker thread unless asked otherwise (the test machine has 2 cores for 3 servers) and no web
+// root. Every process is stopped by stop(); nothing is left running.
 
 import { execFile, spawn } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
@@ -153,8 +153,9 @@ class Redis {
 
 /** The isomesh servers and HAProxy of deploy/compose.yaml on loopback, sharing one Redis. */
 class Cluster {
-  constructor(services, names, ports) {
+  constructor(services, names, ports, threads) {
     this.services = services;
+    this.threads = threads; // worker threads per server; null: compose's (one per core)
     this.names = names; // compose service names of the servers, 'isomesh-1'...
     this.ports = ports; // compose service name -> loopback port
     this.redis = new Redis(services.redis, ports.get('redis'));
@@ -164,13 +165,14 @@ class Cluster {
 
   /** The environment compose gives server `name`, on loopback. */
   serverEnvironment(name) {
-    return {
+    const env = {
       ...hostEnvironment(this.services[name], this.ports),
       ISOMESH_BIND: '127.0.0.1',
       ISOMESH_PORT: String(this.ports.get(name)),
-      ISOMESH_THREADS: '1',
       ISOMESH_WEB_ROOT: '',
     };
+    if (this.threads !== null) env.ISOMESH_THREADS = String(this.threads);
+    return env;
   }
 
   /** Starts server `i` (again, after a kill: same port, same environment). */
@@ -227,14 +229,15 @@ class Cluster {
 }
 
 /**
- * Starts deploy/compose.yaml on loopback with `replicas` (1 to 3) of its isomesh servers; resolves
- * once HAProxy reports every server up.
+ * Starts deploy/compose.yaml on loopback with `replicas` (1 to 3) of its isomesh servers, each with
+ * `threads` worker threads (null: compose's default, one per core); resolves once HAProxy reports
+ * every server up.
  */
-export async function startCluster({ replicas = 3 } = {}) {
+export async function startCluster({ replicas = 3, threads = 1 } = {}) {
   const names = ['isomesh-1', 'isomesh-2', 'isomesh-3'].slice(0, replicas);
   const ports = new Map();
   for (const name of ['redis', ...names, 'haproxy', 'stats']) ports.set(name, await freePort());
-  const cluster = new Cluster(composeServices(), names, ports);
+  const cluster = new Cluster(composeServices(), names, ports, threads);
   try {
     await cluster.redis.start();
     for (let i = 0; i < names.length; ++i) await cluster.startServer(i);
