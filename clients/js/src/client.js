@@ -600,6 +600,7 @@ export class Session extends Emitter {
     this.lastConverged = null;
     this.lastProgress = null;
     this.resyncPending = false;
+    this.stats.lastFrameAt = null; // the first mesh after resubscribing is timed from its request
     this.emit('disconnected');
   }
 

@@ -251,6 +251,7 @@ test('a dropped connection reconnects, resubscribes and sends again the update i
   assert.equal((await update).version, 2);
   second.frame({ kind: 'keyframe', sequence: 0, triangleIds: [7], mesh: { vertices: square.vertices.slice(0, 3), triangles: [[1, 2, 3]] } });
   assert.equal(session.mesh.triangleCount, 1, 'the keyframe of the rebuilt session applies');
+  assert.ok(session.stats.firstMeshMs >= 0, 'timed from the new subscribe');
   assert.equal(client.sessions.get(SESSION), session);
   client.close();
 });

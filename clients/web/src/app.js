@@ -48,6 +48,9 @@ export class App {
     }
     this.reconnects = 0;
     this.client.on('close', () => this.#disconnected('connection closed'));
+    // The library reconnects and subscribes again by itself; the status line shows it meanwhile.
+    this.client.on('disconnected', () => this.#setStatus('disconnected', 'reconnecting'));
+    this.client.on('reconnected', () => (this.session ? this.#refreshStatus() : this.#createSession()));
     this.client.on('error', (error) => console.warn('isomesh:', error));
     await this.#createSession();
   }
@@ -172,6 +175,7 @@ export class App {
     });
     session.on('closed', (m) => {
       if (this.session === session) this.session = null;
+      if (m.reason === 'lost' && this.client?.connected) return this.#createSession(); // server forgot it
       this.#setStatus(m.reason === 'shutdown' ? 'disconnected' : 'closed');
     });
   }
@@ -252,6 +256,7 @@ export class App {
   // ---- status ----------------------------------------------------------------------------------
 
   #refreshStatus() {
+    if (this.client && !this.client.connected) return this.#setStatus('disconnected', 'reconnecting');
     const s = this.session;
     if (!s) {
       this.#setStatus(this.lastError ? 'error' : this.status);
