@@ -3,6 +3,7 @@
 #include <hiredis/hiredis.h>
 #include <sys/time.h>
 
+#include <cerrno>
 #include <charconv>
 
 namespace isomesh::server::store {
@@ -118,26 +119,26 @@ StoreResult<RedisStore::Reply> RedisStore::command(const std::vector<std::string
         lengths.push_back(argument.size());
     }
     std::lock_guard lock(mutex_);
-    std::string failure;
-    for (int attempt = 0; attempt < 2; ++attempt) {  // a second try on a fresh connection
+    // A connection opened by an earlier call may have been closed since (Redis restarted): then
+    // one more try on a fresh connection. A fresh connection that fails, or a timeout, is final.
+    for (bool fresh = context_ == nullptr;; fresh = true) {
         if (!context_) {
-            if (auto problem = connect()) {
-                failure = "cannot connect to " + describe() + ": " + *problem;
-                continue;
-            }
+            if (auto problem = connect())
+                return StoreError{"cannot connect to " + describe() + ": " + *problem};
         }
         Reply reply(static_cast<redisReply*>(redisCommandArgv(
             context_, static_cast<int>(argv.size()), argv.data(), lengths.data())));
-        if (!reply) {
-            failure = describe() + ": " + context_->errstr;
-            disconnect();
-            continue;
+        if (reply) {
+            if (reply->type == REDIS_REPLY_ERROR)
+                return StoreError{describe() + ": " + text(reply.get())};
+            return reply;
         }
-        if (reply->type == REDIS_REPLY_ERROR)
-            return StoreError{describe() + ": " + text(reply.get())};
-        return reply;
+        const bool closed_by_peer =
+            context_->err == REDIS_ERR_EOF || (context_->err == REDIS_ERR_IO && errno != EAGAIN);
+        StoreError failure{describe() + ": " + context_->errstr};
+        disconnect();
+        if (fresh || !closed_by_peer) return failure;
     }
-    return StoreError{failure};
 }
 
 StoreResult<RedisStore::Reply> RedisStore::eval(const char* script,

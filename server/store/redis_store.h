@@ -10,8 +10,9 @@
 // Durability is Redis's: an acknowledged write is in Redis's memory; with `appendonly yes` (as in
 // deploy/redis.conf) it also survives a Redis restart.
 //
-// One connection, used under a mutex; calls time out after kTimeout. A broken connection is
-// reopened once per call, so a restarted Redis is picked up by the next call.
+// One connection, used under a mutex; calls time out after kTimeout (then the call fails and the
+// service leaves the store alone until a probe answers). A connection Redis closed is reopened
+// once within the call, so a restarted Redis is picked up by the next call.
 #pragma once
 
 #include <chrono>

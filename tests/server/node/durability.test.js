@@ -55,6 +55,9 @@ describe('SQLite session store', () => {
       leaver.close(); // no subscriber left: the session expires after the orphan timeout
       await until(async () => (await server.metrics()).get('isomesh_sessions_expired_total') === 1, { what: 'the orphan to expire' });
 
+      const written = await server.metrics();
+      assert.ok(written.get('isomesh_store_write_seconds_count') >= DEFINITIONS.length + 2, 'store writes are measured');
+      assert.equal(written.get('isomesh_store_up'), 1);
       const reconnected = keeper.once('reconnected');
       await server.kill();
       restarted = await startServer([...store, '--port', port]);
