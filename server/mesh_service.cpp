@@ -357,15 +357,7 @@ std::shared_ptr<MeshSession> MeshService::restore(Request& request, const protoc
         request.error(ErrorCode::unknown_session, "no live session " + id.to_hex(), id);
         return nullptr;
     }
-    const auto& route = request.client->route();
-    if (route && *route != route_of(id) && persistence_.exists(id)) {
-        request.error(ErrorCode::wrong_route,
-                      "session " + id.to_hex() + " is served through route " +
-                          route_hex(route_of(id)) + ", not " + route_hex(*route) +
-                          ": connect with ?route=" + route_hex(route_of(id)),
-                      id);
-        return nullptr;
-    }
+    if (on_another_route(request, id)) return nullptr;
     std::lock_guard lock(restore_mutex_);
     if (auto live = find(id)) return live;  // rebuilt meanwhile for another request
     auto claimed = persistence_.claim(id);
@@ -377,20 +369,36 @@ std::shared_ptr<MeshSession> MeshService::restore(Request& request, const protoc
         request.error(ErrorCode::unknown_session, "no live session " + id.to_hex(), id);
         return nullptr;
     }
-    VersionResult version = restored_version(*claimed.record, version_limits_);
+    return rebuild(request, *claimed.record);
+}
+
+bool MeshService::on_another_route(Request& request, const protocol::SessionId& id) {
+    const auto& route = request.client->route();
+    if (!route || *route == route_of(id) || !persistence_.exists(id)) return false;
+    request.error(ErrorCode::wrong_route,
+                  "session " + id.to_hex() + " is served through route " + route_hex(route_of(id)) +
+                      ", not " + route_hex(*route) +
+                      ": connect with ?route=" + route_hex(route_of(id)),
+                  id);
+    return true;
+}
+
+std::shared_ptr<MeshSession> MeshService::rebuild(Request& request,
+                                                  const store::SessionRecord& record) {
+    VersionResult version = restored_version(record, version_limits_);
     if (!version) {
         logger_.warn("session_not_restored",
-                     {{"session", id.to_hex()}, {"message", version.error().message}});
-        persistence_.remove(id);
+                     {{"session", record.id.to_hex()}, {"message", version.error().message}});
+        persistence_.remove(record.id);
         protocol::ErrorReply error = version.error();
-        error.session = id;
+        error.session = record.id;
         request.error(std::move(error));
         return nullptr;
     }
-    auto session = start_session(id, std::move(version).value());
+    auto session = start_session(record.id, std::move(version).value());
     metrics_.sessions_restored.add();
-    logger_.info("session_restored", {{"session", id.to_hex()},
-                                      {"version", claimed.record->version},
+    logger_.info("session_restored", {{"session", record.id.to_hex()},
+                                      {"version", record.version},
                                       {"client", request.client->id()}});
     return session;
 }
@@ -504,31 +512,30 @@ void MeshService::shutdown() {
     logger_.info("sessions_closed", {{"sessions", sessions.size()}});
 }
 
-void MeshService::keep_records(bool activity, bool ownership) {
-    if (!persistence_.enabled() || !persistence_.available()) return;
-    ownership = ownership && persistence_.shared();
-    if (!activity && !ownership) return;
+std::vector<std::shared_ptr<MeshSession>> MeshService::live_sessions() const {
+    std::lock_guard lock(sessions_mutex_);
     std::vector<std::shared_ptr<MeshSession>> live;
-    {
-        std::lock_guard lock(sessions_mutex_);
-        for (const auto& [id, session] : sessions_) live.push_back(session);
+    for (const auto& [id, session] : sessions_) live.push_back(session);
+    return live;
+}
+
+void MeshService::store_activity() {
+    const Clock::time_point now = Clock::now();
+    const std::uint64_t now_us = unix_time_us();
+    std::vector<store::Activity> touched;
+    for (const auto& session : live_sessions()) {
+        const Clock::time_point last = session->last_request();
+        if (last <= activity_kept_) continue;
+        const auto ago = std::chrono::duration_cast<std::chrono::microseconds>(now - last);
+        touched.push_back({session->id(), now_us - static_cast<std::uint64_t>(ago.count())});
     }
-    if (activity) {
-        const Clock::time_point now = Clock::now();
-        const std::uint64_t now_us = unix_time_us();
-        std::vector<store::Activity> touched;
-        for (const auto& session : live) {
-            const Clock::time_point last = session->last_request();
-            if (last <= activity_kept_) continue;
-            const auto ago = std::chrono::duration_cast<std::chrono::microseconds>(now - last);
-            touched.push_back({session->id(), now_us - static_cast<std::uint64_t>(ago.count())});
-        }
-        activity_kept_ = now;
-        persistence_.touch(touched);
-    }
-    if (!ownership) return;
+    activity_kept_ = now;
+    persistence_.touch(touched);
+}
+
+void MeshService::check_ownership() {
     std::vector<protocol::SessionId> ids;
-    for (const auto& session : live) ids.push_back(session->id());
+    for (const auto& session : live_sessions()) ids.push_back(session->id());
     auto owners = persistence_.check(ids);
     if (!owners) return;
     moved(owners->moved);
@@ -554,11 +561,15 @@ void MeshService::housekeeping() {
         const Clock::time_point now = Clock::now();
         expire(now);
         persistence_.maintain(now);
-        const bool activity = now - activity_start >= activity_interval(config_);
-        const bool ownership = now - ownership_start >= kOwnershipInterval;
-        if (activity) activity_start = now;
-        if (ownership) ownership_start = now;
-        if (!shutting_down_) keep_records(activity, ownership);
+        const bool keep = persistence_.enabled() && persistence_.available() && !shutting_down_;
+        if (now - activity_start >= activity_interval(config_)) {
+            activity_start = now;
+            if (keep) store_activity();
+        }
+        if (now - ownership_start >= kOwnershipInterval) {
+            ownership_start = now;
+            if (keep && persistence_.shared()) check_ownership();
+        }
         if (now - second_start >= std::chrono::seconds(1)) {
             const std::uint64_t splits = metrics_.splits.value();
             metrics_.splits_per_second.set(static_cast<std::int64_t>(

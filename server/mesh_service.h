@@ -94,6 +94,10 @@ class MeshService {
     /// after replying unknown_session, wrong_route or store_unavailable.
     std::shared_ptr<MeshSession> named_session(Request& request, const protocol::SessionId& id);
     std::shared_ptr<MeshSession> restore(Request& request, const protocol::SessionId& id);
+    /// True after replying wrong_route: the connection's route is not `id`'s, whose record exists.
+    bool on_another_route(Request& request, const protocol::SessionId& id);
+    /// A live session from `record`, or nothing after replying why not.
+    std::shared_ptr<MeshSession> rebuild(Request& request, const store::SessionRecord& record);
     /// Registers a new session (no subscriber yet).
     std::shared_ptr<MeshSession> start_session(const protocol::SessionId& id,
                                                FunctionVersion version);
@@ -104,8 +108,12 @@ class MeshService {
     /// Another server serves `sessions` now: their subscribers are told to go there.
     void moved(const std::vector<protocol::SessionId>& sessions);
     void housekeeping();
-    /// The store's upkeep: last activity, and (shared store) who owns the live sessions.
-    void keep_records(bool activity, bool ownership);
+    std::vector<std::shared_ptr<MeshSession>> live_sessions() const;
+    /// Stores when live sessions were last named by a request (idle expiry after a restart).
+    void store_activity();
+    /// (A shared store.) Lets go of the sessions another server took over; writes again the
+    /// records that vanished.
+    void check_ownership();
 
     ServerConfig config_;
     Logger& logger_;
