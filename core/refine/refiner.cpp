@@ -29,6 +29,7 @@
 #include <chrono>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <glm/common.hpp>
 
@@ -218,25 +219,18 @@ void Refiner::Impl::replace_neighbour(std::uint32_t t, std::uint32_t old_nb, std
 // Steps and views
 
 StepResult Refiner::Impl::step(const StepBudget& budget, bool take) {
-    using Clock = std::chrono::steady_clock;
-    const auto start = Clock::now();
     const RefineCounters before = counters_;
     StepResult result;
     std::size_t operations = 0;
     while (operations < budget.operations) {
-        if (settings_.cancel && settings_.cancel->load(std::memory_order_relaxed)) {
+        if ((settings_.cancel && settings_.cancel->load(std::memory_order_relaxed)) ||
+            budget.work.cancelled()) {
             result.cancelled = true;
             break;
         }
         // A step makes progress whatever its time budget: the first operation is always done.
-        if (budget.microseconds > 0 && operations > 0 &&
-            Clock::now() - start >= std::chrono::microseconds(budget.microseconds))
-            break;
-        if (restart_pending_) {
-            restart();
-            result.restarted = true;
-            ++operations;
-        } else if (refresh_pending()) {
+        if (operations > 0 && budget.work.timed() && budget.work.exhausted()) break;
+        if (refresh_pending()) {
             const std::size_t done = refresh_some(budget.operations - operations);
             result.refreshed += done;
             operations += done;
@@ -247,6 +241,7 @@ StepResult Refiner::Impl::step(const StepBudget& budget, bool take) {
             break;
         }
     }
+    result.restarted = std::exchange(restarted_, false);
     result.splits = counters_.splits - before.splits;
     result.merges = counters_.merges - before.merges;
     if (take) result.delta = delta_.take();
@@ -318,17 +313,6 @@ Refiner::Refiner(std::shared_ptr<const Field> field, const Mesh& first_mesh,
                  RefineSettings settings)
     : impl_(std::make_unique<Impl>(std::move(field), first_mesh, std::move(settings))) {}
 
-namespace {
-Mesh run_phase1(const std::shared_ptr<const Field>& field, const RefineSettings& settings) {
-    if (!field) throw std::invalid_argument("Refiner: null field");
-    if (!settings.phase1) throw std::invalid_argument("Refiner: no phase1 to make the first mesh");
-    return settings.phase1(*field);
-}
-}  // namespace
-
-Refiner::Refiner(std::shared_ptr<const Field> field, RefineSettings settings)
-    : Refiner(field, run_phase1(field, settings), settings) {}
-
 Refiner::~Refiner() = default;
 
 StepResult Refiner::step(const StepBudget& budget) {
@@ -337,7 +321,7 @@ StepResult Refiner::step(const StepBudget& budget) {
 
 StepResult Refiner::run_to_convergence(std::size_t operations_per_step) {
     StepResult total;
-    const StepBudget budget{operations_per_step, 0};
+    const StepBudget budget{operations_per_step, WorkBudget{}};
     for (;;) {
         const StepResult r = impl_->step(budget, false);
         total.splits += r.splits;
@@ -368,6 +352,18 @@ std::uint64_t Refiner::version() const {
 }
 bool Refiner::field_change_pending() const {
     return impl_->field_change_pending();
+}
+bool Refiner::refresh_failed() const {
+    return impl_->refresh_failed();
+}
+void Refiner::reset(const Mesh& first_mesh) {
+    impl_->reset(first_mesh);
+}
+const TopologyReport& Refiner::root_topology() const {
+    return impl_->root_topology();
+}
+std::size_t Refiner::inverted_triangles() const {
+    return impl_->inverted_triangles();
 }
 MeshStats Refiner::stats() const {
     return impl_->stats();

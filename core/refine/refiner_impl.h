@@ -1,7 +1,7 @@
 // Private to core/refine: the state of a Refiner, shared by the files that implement it:
 // refiner.cpp (structure, steps, views), triangle_errors.cpp (candidates, errors, queue entries),
 // bisection.cpp (splits with their forced splits, merges), dual_queues.cpp (which operation comes
-// next) and function_versions.cpp (set_field). See refiner.cpp for the design.
+// next) and field_changes.cpp (set_field, reset). See refiner.cpp for the design.
 #pragma once
 
 #include <array>
@@ -161,7 +161,11 @@ class Refiner::Impl {
     void set_constraint(Constraint c) { constraint_ = std::move(c); }
     const Constraint& constraint() const { return constraint_; }
     std::uint64_t version() const { return version_; }
-    bool field_change_pending() const { return restart_pending_ || refresh_pending(); }
+    bool field_change_pending() const { return refresh_pending(); }
+    bool refresh_failed() const { return refresh_failed_; }
+    void reset(const Mesh& first_mesh);
+    const TopologyReport& root_topology() const { return root_topology_; }
+    std::size_t inverted_triangles() const;
     MeshStats stats() const;
     QueueEnds queue_ends() const {
         return {split_queue_->extreme_priority(), merge_queue_->extreme_priority()};
@@ -236,7 +240,6 @@ class Refiner::Impl {
     void refresh_vertices(std::span<const std::uint32_t> vertices);
     void refresh_leaves(std::span<const std::uint32_t> leaves);
     void refresh_records(std::span<const std::uint32_t> records);
-    void restart();
 
     RefineSettings settings_;
     Constraint constraint_;
@@ -275,8 +278,8 @@ class Refiner::Impl {
     RefreshStage refresh_stage_ = RefreshStage::None;
     std::vector<std::uint32_t> refresh_list_;
     std::size_t refresh_next_ = 0;
-    std::optional<Mesh> fresh_phase1_;  // the new function's phase-1 mesh, if computed
-    bool restart_pending_ = false;
+    bool refresh_failed_ = false;  // some vertex found no surface since the last set_field
+    bool restarted_ = false;       // reset() since the last step
 };
 
 }  // namespace isomesh

@@ -86,7 +86,7 @@ TEST_P(RefineGallery, conforming_after_every_step_of_splits_and_merges) {
 
     auto check_steps = [&](std::size_t operations) {
         for (int step = 0; step < 1000; ++step) {
-            StepResult r = refiner.step({operations, 0});
+            StepResult r = refiner.step({operations});
             deltas.push_back(std::move(r.delta));
             const Mesh mesh = refiner.mesh().mesh;
             ASSERT_EQ(test::check_conforming(mesh, boundary), "") << "step " << step;

@@ -36,7 +36,7 @@ const SURFACES = [
  * The definition of session j after `step` updates. Every update moves the slider and the box:
  * a new box makes the server mesh from scratch, so the converged mesh depends on the definition
  * alone, not on when the updates came (parameter-only updates refine from the mesh on hand,
- * PROTOCOL.md 3.4), and every session can be checked against a reference server.
+ * PROTOCOL.md 3.5), and every session can be checked against a reference server.
  */
 function definition(j, step = 0) {
   const { expression, a } = SURFACES[j % SURFACES.length];
