@@ -25,9 +25,11 @@ enum class ErrorCode {
     unavailable,          ///< the server is shutting down and accepts no new work
     internal,             ///< a bug in the server: report it
     bad_frame,            ///< a binary frame is malformed (used by frame decoders)
+    store_unavailable,    ///< the session store is down: no new session or update for now
+    wrong_route,          ///< the session belongs to another route (PROTOCOL.md, 1 Connection)
 };
 
-inline constexpr int kErrorCodeCount = static_cast<int>(ErrorCode::bad_frame) + 1;
+inline constexpr int kErrorCodeCount = static_cast<int>(ErrorCode::wrong_route) + 1;
 
 /// The code's wire name, e.g. "bad_json".
 std::string_view to_string(ErrorCode code);

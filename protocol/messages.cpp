@@ -20,7 +20,7 @@ constexpr std::array<std::string_view, kErrorCodeCount> kErrorCodeNames = {
     "bad_json",         "unsupported_version", "unknown_type", "bad_field",
     "unknown_session",  "bad_expression",      "too_large",    "too_many_sessions",
     "budget_too_large", "eval_timeout",        "unavailable",  "internal",
-    "bad_frame",
+    "bad_frame",        "store_unavailable",   "wrong_route",
 };
 
 constexpr std::array<std::string_view, 18> kMessageTypeNames = {
@@ -29,8 +29,8 @@ constexpr std::array<std::string_view, 18> kMessageTypeNames = {
     "ack",    "pong",   "progress",  "converged",   "error",   "closed",
 };
 
-constexpr std::array<std::string_view, 4> kCloseReasonNames = {"closed", "expired", "shutdown",
-                                                               "error"};
+constexpr std::array<std::string_view, 5> kCloseReasonNames = {"closed", "expired", "shutdown",
+                                                               "error", "moved"};
 constexpr std::array<std::string_view, 3> kOutcomeNames = {"surface", "no_surface",
                                                            "region_not_surface"};
 
@@ -490,7 +490,7 @@ ServerMessage read_closed(FieldReader& in) {
     if (parsed) {
         m.reason = *parsed;
     } else {
-        in.fail_field("reason", "must be one of closed, expired, shutdown, error");
+        in.fail_field("reason", "must be one of closed, expired, shutdown, error, moved");
     }
     return m;
 }

@@ -224,13 +224,15 @@ struct ErrorReply {
 
 /// A session ended; its subscribers receive nothing more about it.
 struct Closed {
-    enum class Reason { closed, expired, shutdown, error };
+    /// moved: the session goes on, but not on this connection (the server is draining, or
+    /// another server now serves it): reconnect and subscribe again.
+    enum class Reason { closed, expired, shutdown, error, moved };
     SessionId session;
     Reason reason = Reason::closed;
     friend bool operator==(const Closed&, const Closed&) = default;
 };
 
-/// The reason's name on the wire ("closed", "expired", "shutdown", "error").
+/// The reason's name on the wire ("closed", "expired", "shutdown", "error", "moved").
 std::string_view to_string(Closed::Reason reason);
 std::string_view to_string(Outcome outcome);
 

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs everything isomesh needs to build, test and run, from Debian 12's packages
-# (chromium: the browser test of the viewer, tests/web, drives Debian's browser; none is downloaded).
+# (chromium: the browser test of the viewer, tests/web, drives Debian's browser; none is downloaded;
+# redis-server and haproxy: the cluster tests start their own on loopback ports and stop them).
 # Idempotent: packages already present are skipped by apt.
 set -euo pipefail
 if [ "$(id -u)" -ne 0 ]; then SUDO=sudo; else SUDO=; fi
@@ -9,6 +10,7 @@ packages=(
   clang libclang-rt-14-dev clang-format
   libboost-dev libglm-dev nlohmann-json3-dev libdraco-dev libeigen3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libsqlite3-dev libhiredis-dev redis-server haproxy
   chromium
 )
 missing=()

@@ -9,8 +9,10 @@ bash scripts/install-deps.sh
 bash scripts/build.sh -DISOMESH_BUILD_TESTS=ON -DISOMESH_BUILD_BENCH=ON
 ctest --test-dir build --output-on-failure -j "$(nproc)" --timeout 600
 # The server end to end: real isomesh-servers on loopback ports, WebSocket clients applying every
-# frame (tests/server/node: meshes equal to `isomesh mesh`, slow and vanished clients, bad input).
-(cd tests/server/node && npm ci --no-audit --no-fund && node --test)
+# frame (tests/server/node: meshes equal to `isomesh mesh`, slow and vanished clients, bad input;
+# sessions surviving kill -9 with SQLite; the deploy/ cluster with Redis and HAProxy). One file at
+# a time: the cluster test's servers would slow the timing-sensitive ones of another file down.
+(cd tests/server/node && npm ci --no-audit --no-fund && node --test --test-concurrency=1)
 # The protocol's Node check: draco3d decodes frames and Ajv validates messages made by the C++ side.
 (cd tests/protocol/node && npm ci --no-audit --no-fund && node --test)
 # The CLI's .glb passes Khronos's gltf-validator and decodes with draco3d to the .ply's triangles.

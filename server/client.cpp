@@ -2,6 +2,28 @@
 
 namespace isomesh::server {
 
+protocol::Result<std::optional<Route>, std::string> route_of_target(std::string_view target) {
+    const auto query = target.find('?');
+    if (query == std::string_view::npos) return std::optional<Route>();
+    std::string_view rest = target.substr(query + 1);
+    while (!rest.empty()) {
+        const auto amp = rest.find('&');
+        const std::string_view parameter = rest.substr(0, amp);
+        rest = amp == std::string_view::npos ? std::string_view() : rest.substr(amp + 1);
+        if (!parameter.starts_with("route=")) continue;
+        // 8 hex digits are the first 4 bytes of a session id: pad and parse as one.
+        const std::string_view hex = parameter.substr(6);
+        auto id = protocol::SessionId::from_hex(std::string(hex) + std::string(24, '0'));
+        if (hex.size() != 8 || !id) return std::string("route: expected 8 hex digits");
+        return std::optional<Route>(route_of(*id));
+    }
+    return std::optional<Route>();
+}
+
+Route route_of(const protocol::SessionId& id) {
+    return {id.bytes[0], id.bytes[1], id.bytes[2], id.bytes[3]};
+}
+
 Client::Client(std::uint64_t id, std::size_t queue_bytes, std::function<void()> wakeup,
                Metrics* metrics)
     : id_(id), queue_(queue_bytes, std::move(wakeup), metrics) {}

@@ -2,17 +2,34 @@
 // sessions it follows. Knows nothing of the network (net/ drives the queue).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "protocol/messages.h"
 #include "server/output_queue.h"
 
 namespace isomesh::server {
+
+/// A connection's routing key: the `route` query parameter of its WebSocket URL, 8 hex digits
+/// (PROTOCOL.md, 1 Connection). Load balancers hash it to pick a server; the sessions the
+/// connection creates get it as the first 4 bytes of their ids, so that anyone holding a
+/// session id knows the route to the server that serves it.
+using Route = std::array<std::uint8_t, 4>;
+
+/// The route of a WebSocket request target such as "/ws?route=0a1b2c3d": nothing when the target
+/// has no route parameter, an error message when the parameter is malformed.
+protocol::Result<std::optional<Route>, std::string> route_of_target(std::string_view target);
+
+/// The route of a session id (its first 4 bytes).
+Route route_of(const protocol::SessionId& id);
 
 class Client {
   public:
@@ -36,11 +53,15 @@ class Client {
     /// Forgets every subscription (the connection closed) and returns them.
     std::vector<protocol::SessionId> take_subscriptions();
 
+    void set_route(std::optional<Route> route) { route_ = route; }
+    const std::optional<Route>& route() const { return route_; }
+
   private:
     const std::uint64_t id_;
     OutputQueue queue_;
     mutable std::mutex mutex_;
     std::set<protocol::SessionId> subscriptions_;
+    std::optional<Route> route_;  // set before the first message
 };
 
 }  // namespace isomesh::server

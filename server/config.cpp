@@ -1,5 +1,7 @@
 #include "server/config.h"
 
+#include "server/store/session_store.h"
+
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -86,6 +88,20 @@ Option string_option(std::string_view name, std::string_view help,
     return {name, help, set, show};
 }
 
+Option store_option() {
+    Setter set = [](ServerConfig& c, std::string_view text) -> std::optional<std::string> {
+        if (!text.empty() && !store::parse_store_spec(text))
+            return "none, sqlite:PATH or redis://HOST:PORT";
+        c.store = std::string(text);
+        return std::nullopt;
+    };
+    Shower show = [](const ServerConfig& c) { return resolved_store(c); };
+    return {"store",
+            "where sessions are kept across restarts: sqlite:PATH (one server), "
+            "redis://HOST:PORT (shared by several servers) or none (in memory only)",
+            set, show};
+}
+
 Option log_level_option() {
     Setter set = [](ServerConfig& c, std::string_view text) -> std::optional<std::string> {
         auto level = log_level_from_string(text);
@@ -139,6 +155,9 @@ const std::vector<Option>& options() {
                     &ServerConfig::orphan_timeout_s, 0, 365 * kDay),
         real_option("drain-timeout", "seconds queued frames may take to leave at shutdown",
                     &ServerConfig::drain_timeout_s, 0, 3600),
+        store_option(),
+        string_option("data-dir", "folder of the server's files (the default session store)",
+                      &ServerConfig::data_dir),
         log_level_option(),
     };
     return table;
@@ -222,13 +241,27 @@ std::string config_usage(const ServerConfig& defaults) {
     std::string text =
         "usage: isomesh-server [--OPTION VALUE]...\n\n"
         "Serves isosurface meshing sessions over WebSocket at /ws, the browser client at /,\n"
-        "/healthz and /metrics (Prometheus). Every option may also be set by the environment\n"
+        "/healthz, /readyz and /metrics (Prometheus). Every option may also be set by the "
+        "environment\n"
         "variable shown; the command line wins.\n\noptions:\n";
     for (const Option& option : options()) {
         text += "  --" + std::string(option.name) + " (" + env_name(option.name) + ", default '" +
                 option.show(defaults) + "')\n      " + std::string(option.help) + "\n";
     }
     return text;
+}
+
+std::string resolved_store(const ServerConfig& config) {
+    if (!config.store.empty()) return config.store;
+    return "sqlite:" + config.data_dir + "/sessions.db";
+}
+
+std::string default_data_dir(const std::function<const char*(const char*)>& getenv) {
+    const char* state = getenv("XDG_STATE_HOME");
+    if (state && *state) return std::string(state) + "/isomesh";
+    const char* home = getenv("HOME");
+    if (home && *home) return std::string(home) + "/.local/state/isomesh";
+    return "isomesh-data";
 }
 
 unsigned resolved_worker_threads(const ServerConfig& config) {

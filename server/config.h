@@ -47,6 +47,11 @@ struct ServerConfig {
     double orphan_timeout_s = 30;  ///< a session without subscribers for this long expires
     double drain_timeout_s = 5;    ///< SIGTERM: how long queued frames may take to leave
 
+    // sessions kept across restarts (server/store/session_store.h)
+    /// "none", "sqlite:PATH" or "redis://HOST:PORT"; empty: sqlite:DATA_DIR/sessions.db
+    std::string store;
+    std::string data_dir = "isomesh-data";  ///< the server's files (main() sets the default)
+
     LogLevel log_level = LogLevel::info;
 };
 
@@ -69,5 +74,12 @@ std::string config_usage(const ServerConfig& defaults = {});
 
 /// The worker thread count: config.worker_threads, or the number of cores when 0.
 unsigned resolved_worker_threads(const ServerConfig& config);
+
+/// The --store value in force: config.store, or the SQLite file in the data directory.
+std::string resolved_store(const ServerConfig& config);
+
+/// The default data directory: $XDG_STATE_HOME/isomesh, else $HOME/.local/state/isomesh, else
+/// ./isomesh-data.
+std::string default_data_dir(const std::function<const char*(const char*)>& getenv);
 
 }  // namespace isomesh::server

@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <filesystem>
 #include <string_view>
 #include <vector>
 
@@ -10,6 +11,7 @@
 #include "server/mesh_service.h"
 #include "server/metrics.h"
 #include "server/net/http_server.h"
+#include "server/store/session_store.h"
 
 namespace {
 
@@ -23,10 +25,35 @@ std::string browser_url(const ServerConfig& config, std::uint16_t port) {
     return "http://" + host + ":" + std::to_string(port) + "/";
 }
 
+/// The session store --store names (nullptr for none), or nothing after logging why it cannot
+/// be opened. An SQLite file's folder is created when missing.
+std::optional<std::unique_ptr<store::SessionStore>> open_session_store(const ServerConfig& config,
+                                                                       Logger& logger) {
+    const std::string text = resolved_store(config);
+    const auto spec = store::parse_store_spec(text);  // checked by parse_config
+    if (spec->kind == store::StoreSpec::Kind::sqlite) {
+        std::error_code ec;
+        const auto folder = std::filesystem::path(spec->path).parent_path();
+        if (!folder.empty()) std::filesystem::create_directories(folder, ec);
+    }
+    // Redis forgets a record nobody touched for the idle timeout and a margin (the server stores
+    // activity at most every minute).
+    const auto ttl = static_cast<std::uint32_t>(std::min(config.idle_timeout_s + 180.0, 4e9));
+    auto opened = store::open_store(*spec, ttl);
+    if (!opened) {
+        logger.error("store_failed", {{"store", text}, {"message", opened.error().message}});
+        std::fprintf(stderr, "isomesh-server: %s\n", opened.error().message.c_str());
+        return std::nullopt;
+    }
+    return std::move(opened).value();
+}
+
 int serve(const ServerConfig& config) {
     Logger logger(config.log_level);
     Metrics metrics;
-    MeshService service(config, logger, metrics);
+    auto store = open_session_store(config, logger);
+    if (!store) return 1;
+    MeshService service(config, logger, metrics, std::move(*store));
     net::HttpServer server(service, config, logger, metrics);
     std::uint16_t port = 0;
     try {
@@ -46,6 +73,7 @@ int serve(const ServerConfig& config) {
                               {"url", browser_url(config, port)},
                               {"websocket", "/ws"},
                               {"web_root", config.web_root},
+                              {"store", resolved_store(config)},
                               {"worker_threads", resolved_worker_threads(config)}});
     server.run();
     logger.info("stopped");
@@ -57,6 +85,7 @@ int serve(const ServerConfig& config) {
 int main(int argc, char** argv) {
     ServerConfig defaults;
     defaults.web_root = ISOMESH_DEFAULT_WEB_ROOT;
+    defaults.data_dir = default_data_dir([](const char* name) { return std::getenv(name); });
     const std::vector<std::string_view> args(argv + 1, argv + argc);
     const ConfigResult parsed = parse_config(
         args, [](const char* name) { return std::getenv(name); }, defaults);

@@ -1,5 +1,6 @@
 #include "server/mesh_service.h"
 
+#include <algorithm>
 #include <random>
 
 namespace isomesh::server {
@@ -36,9 +37,29 @@ protocol::ParseLimits parse_limits(const ServerConfig& config) {
     return limits;
 }
 
+constexpr const char* kStoreDown =
+    "the session store is unreachable: new sessions and changes to sessions are refused until it "
+    "answers again (live sessions keep streaming)";
+
+/// How often the time of the last request of each session is stored (idle expiry after a
+/// restart, the Redis key's time to live).
+Clock::duration activity_interval(const ServerConfig& config) {
+    return std::clamp<Clock::duration>(to_duration(config.idle_timeout_s / 4),
+                                       std::chrono::milliseconds(100), std::chrono::seconds(60));
+}
+
+/// How often a server sharing its store checks that it still owns its live sessions.
+constexpr auto kOwnershipInterval = std::chrono::seconds(1);
+
+std::string route_hex(const Route& route) {
+    protocol::SessionId id;
+    std::copy(route.begin(), route.end(), id.bytes.begin());
+    return id.to_hex().substr(0, 8);
+}
+
 }  // namespace
 
-protocol::SessionId random_session_id() {
+protocol::SessionId random_session_id(const std::optional<Route>& route) {
     static std::mutex mutex;
     static std::random_device device;
     std::lock_guard lock(mutex);
@@ -48,6 +69,7 @@ protocol::SessionId random_session_id() {
         for (std::size_t b = 0; b < 4; ++b)
             id.bytes[i + b] = static_cast<std::uint8_t>(word >> (8 * b));
     }
+    if (route) std::copy(route->begin(), route->end(), id.bytes.begin());
     return id;
 }
 
@@ -82,7 +104,8 @@ struct MeshService::Request {
     }
 };
 
-MeshService::MeshService(const ServerConfig& config, Logger& logger, Metrics& metrics)
+MeshService::MeshService(const ServerConfig& config, Logger& logger, Metrics& metrics,
+                         std::unique_ptr<store::SessionStore> store)
     : config_(config),
       logger_(logger),
       metrics_(metrics),
@@ -98,7 +121,10 @@ MeshService::MeshService(const ServerConfig& config, Logger& logger, Metrics& me
                     logger.error("worker_exception", {{"message", "unknown"}});
                 }
             }),
-      housekeeper_([this] { housekeeping(); }) {}
+      persistence_(std::move(store), metrics, logger),
+      housekeeper_([this] { housekeeping(); }) {
+    reload();
+}
 
 MeshService::~MeshService() {
     {
@@ -112,9 +138,18 @@ MeshService::~MeshService() {
     sessions_.clear();
 }
 
-std::shared_ptr<Client> MeshService::connect(std::function<void()> wakeup) {
-    return std::make_shared<Client>(next_client_id_++, config_.queue_bytes, std::move(wakeup),
-                                    &metrics_);
+std::shared_ptr<Client> MeshService::connect(std::function<void()> wakeup,
+                                             std::optional<Route> route) {
+    auto client = std::make_shared<Client>(next_client_id_++, config_.queue_bytes,
+                                           std::move(wakeup), &metrics_);
+    client->set_route(route);
+    return client;
+}
+
+std::optional<std::string> MeshService::unready() const {
+    if (shutting_down_) return "draining";
+    if (!persistence_.available()) return "session store unreachable";
+    return std::nullopt;
 }
 
 void MeshService::receive(const std::shared_ptr<Client>& client, std::string_view text) {
@@ -176,16 +211,13 @@ void MeshService::handle(Request& request, const protocol::Create& create) {
         request.error(version.error());
         return;
     }
-    const protocol::SessionId id = random_session_id();
+    const protocol::SessionId id = random_session_id(request.client->route());
     const protocol::SessionState state = version.value().state;
-    auto session = std::make_shared<MeshSession>(
-        id, std::move(version).value(),
-        SessionServices{pool_, watchdog_, metrics_, logger_, session_settings(config_)},
-        [this](const protocol::SessionId& ended) { remove(ended); });
-    {
-        std::lock_guard lock(sessions_mutex_);
-        sessions_[id] = session;
+    if (persistence_.save(id, version.value()) != SessionPersistence::Outcome::ok) {
+        request.error(ErrorCode::store_unavailable, kStoreDown);
+        return;
     }
+    auto session = start_session(id, std::move(version).value());
     request.client->add_subscription(id, config_.max_sessions_per_connection);
     request.client->queue().expect_keyframe(id);
     session->subscribe(request.client, [&] {
@@ -200,15 +232,32 @@ void MeshService::handle(Request& request, const protocol::Create& create) {
 void MeshService::handle(Request& request, const protocol::Update& update) {
     auto session = named_session(request, update.session);
     if (!session) return;
+    bool moved_away = false;
     session->update(update, version_limits_, [&](const VersionResult& result) {
         if (!result) {
             protocol::ErrorReply error = result.error();
             error.session = update.session;
             request.error(std::move(error));
-            return;
+            return false;
+        }
+        switch (persistence_.save(update.session, result.value())) {  // before `updated` leaves
+            case SessionPersistence::Outcome::ok:
+                break;
+            case SessionPersistence::Outcome::moved:
+                moved_away = true;
+                request.error(ErrorCode::wrong_route,
+                              "another server serves this session now: reconnect and send the "
+                              "request again",
+                              update.session);
+                return false;
+            default:
+                request.error(ErrorCode::store_unavailable, kStoreDown, update.session);
+                return false;
         }
         request.reply(protocol::Updated{request.id, update.session, result.value().state});
+        return true;
     });
+    if (moved_away) moved({update.session});
 }
 
 void MeshService::handle(Request& request, const protocol::Subscribe& subscribe) {
@@ -263,12 +312,14 @@ void MeshService::handle(Request& request, const protocol::Resume& resume) {
 }
 
 void MeshService::handle(Request& request, const protocol::Close& close) {
+    if (!named_session(request, close.session)) return;  // one served elsewhere comes here first
     auto session = remove(close.session);
     if (!session) {
         request.error(ErrorCode::unknown_session, "no live session " + close.session.to_hex(),
                       close.session);
         return;
     }
+    persistence_.remove(close.session);  // before the ack: a closed session never comes back
     request.ack(MessageType::close, close.session);
     session->close(protocol::Closed::Reason::closed);
     logger_.info("session_closed", {{"session", close.session.to_hex()}, {"reason", "closed"}});
@@ -295,12 +346,93 @@ void MeshService::handle(Request& request, const protocol::Ping&) {
 std::shared_ptr<MeshSession> MeshService::named_session(Request& request,
                                                         const protocol::SessionId& id) {
     auto session = find(id);
-    if (!session) {
+    if (!session) session = restore(request, id);
+    if (!session) return nullptr;
+    session->touch();
+    return session;
+}
+
+std::shared_ptr<MeshSession> MeshService::restore(Request& request, const protocol::SessionId& id) {
+    if (!persistence_.enabled()) {
         request.error(ErrorCode::unknown_session, "no live session " + id.to_hex(), id);
         return nullptr;
     }
-    session->touch();
+    if (on_another_route(request, id)) return nullptr;
+    std::lock_guard lock(restore_mutex_);
+    if (auto live = find(id)) return live;  // rebuilt meanwhile for another request
+    auto claimed = persistence_.claim(id);
+    if (claimed.outcome == SessionPersistence::Outcome::unavailable) {
+        request.error(ErrorCode::store_unavailable, kStoreDown, id);
+        return nullptr;
+    }
+    if (!claimed.record) {
+        request.error(ErrorCode::unknown_session, "no live session " + id.to_hex(), id);
+        return nullptr;
+    }
+    return rebuild(request, *claimed.record);
+}
+
+bool MeshService::on_another_route(Request& request, const protocol::SessionId& id) {
+    const auto& route = request.client->route();
+    if (!route || *route == route_of(id) || !persistence_.exists(id)) return false;
+    request.error(ErrorCode::wrong_route,
+                  "session " + id.to_hex() + " is served through route " + route_hex(route_of(id)) +
+                      ", not " + route_hex(*route) +
+                      ": connect with ?route=" + route_hex(route_of(id)),
+                  id);
+    return true;
+}
+
+std::shared_ptr<MeshSession> MeshService::rebuild(Request& request,
+                                                  const store::SessionRecord& record) {
+    VersionResult version = restored_version(record, version_limits_);
+    if (!version) {
+        logger_.warn("session_not_restored",
+                     {{"session", record.id.to_hex()}, {"message", version.error().message}});
+        persistence_.remove(record.id);
+        protocol::ErrorReply error = version.error();
+        error.session = record.id;
+        request.error(std::move(error));
+        return nullptr;
+    }
+    auto session = start_session(record.id, std::move(version).value());
+    metrics_.sessions_restored.add();
+    logger_.info("session_restored", {{"session", record.id.to_hex()},
+                                      {"version", record.version},
+                                      {"client", request.client->id()}});
     return session;
+}
+
+std::shared_ptr<MeshSession> MeshService::start_session(const protocol::SessionId& id,
+                                                        FunctionVersion version) {
+    auto session = std::make_shared<MeshSession>(
+        id, std::move(version),
+        SessionServices{pool_, watchdog_, metrics_, logger_, session_settings(config_)},
+        [this](const protocol::SessionId& ended_id) { ended(ended_id); });
+    std::lock_guard lock(sessions_mutex_);
+    sessions_[id] = session;
+    return session;
+}
+
+void MeshService::reload() {
+    if (!persistence_.enabled() || persistence_.shared()) return;  // shared: on demand
+    const auto idle_us = static_cast<std::uint64_t>(config_.idle_timeout_s * 1e6);
+    const std::uint64_t now_us = unix_time_us();
+    std::size_t restored = 0;
+    for (const store::SessionRecord& record :
+         persistence_.claim_all(now_us > idle_us ? now_us - idle_us : 0)) {
+        VersionResult version = restored_version(record, version_limits_);
+        if (!version) {
+            logger_.warn("session_not_restored",
+                         {{"session", record.id.to_hex()}, {"message", version.error().message}});
+            persistence_.remove(record.id);
+            continue;
+        }
+        start_session(record.id, std::move(version).value());
+        metrics_.sessions_restored.add();
+        ++restored;
+    }
+    logger_.info("sessions_reloaded", {{"sessions", restored}});
 }
 
 // ---- registry, expiry, shutdown ---------------------------------------------------------------
@@ -318,6 +450,19 @@ std::shared_ptr<MeshSession> MeshService::remove(const protocol::SessionId& id) 
     auto session = std::move(it->second);
     sessions_.erase(it);
     return session;
+}
+
+void MeshService::ended(const protocol::SessionId& id) {
+    if (remove(id)) persistence_.remove(id);
+}
+
+void MeshService::moved(const std::vector<protocol::SessionId>& sessions) {
+    for (const protocol::SessionId& id : sessions) {
+        auto session = remove(id);
+        if (!session) continue;
+        session->close(protocol::Closed::Reason::moved);
+        logger_.info("session_moved", {{"session", id.to_hex()}});
+    }
 }
 
 std::size_t MeshService::session_count() const {
@@ -344,6 +489,7 @@ void MeshService::expire(Clock::time_point now) {
         }
     }
     for (const auto& session : expired) {
+        persistence_.remove(session->id());
         session->close(protocol::Closed::Reason::expired);
         metrics_.sessions_expired.add();
         logger_.info("session_expired", {{"session", session->id().to_hex()}});
@@ -357,21 +503,73 @@ void MeshService::shutdown() {
         std::lock_guard lock(sessions_mutex_);
         sessions.swap(sessions_);
     }
-    for (const auto& [id, session] : sessions) session->close(protocol::Closed::Reason::shutdown);
+    // With a store the sessions go on: their records stay, and subscribers are told to come back
+    // (to this server once it has restarted, or to the one a load balancer picks).
+    const auto reason = persistence_.enabled() ? protocol::Closed::Reason::moved
+                                               : protocol::Closed::Reason::shutdown;
+    for (const auto& [id, session] : sessions) session->close(reason);
     pool_.wait_idle(Clock::now() + to_duration(config_.drain_timeout_s));
     logger_.info("sessions_closed", {{"sessions", sessions.size()}});
+}
+
+std::vector<std::shared_ptr<MeshSession>> MeshService::live_sessions() const {
+    std::lock_guard lock(sessions_mutex_);
+    std::vector<std::shared_ptr<MeshSession>> live;
+    for (const auto& [id, session] : sessions_) live.push_back(session);
+    return live;
+}
+
+void MeshService::store_activity() {
+    const Clock::time_point now = Clock::now();
+    const std::uint64_t now_us = unix_time_us();
+    std::vector<store::Activity> touched;
+    for (const auto& session : live_sessions()) {
+        const Clock::time_point last = session->last_request();
+        if (last <= activity_kept_) continue;
+        const auto ago = std::chrono::duration_cast<std::chrono::microseconds>(now - last);
+        touched.push_back({session->id(), now_us - static_cast<std::uint64_t>(ago.count())});
+    }
+    activity_kept_ = now;
+    persistence_.touch(touched);
+}
+
+void MeshService::check_ownership() {
+    std::vector<protocol::SessionId> ids;
+    for (const auto& session : live_sessions()) ids.push_back(session->id());
+    auto owners = persistence_.check(ids);
+    if (!owners) return;
+    moved(owners->moved);
+    for (const protocol::SessionId& id : owners->missing) {
+        // The record vanished (the store lost it, or its time to live ran out while the store was
+        // down): written again, under the registry's lock so that a close cannot slip between.
+        std::lock_guard lock(sessions_mutex_);
+        auto it = sessions_.find(id);
+        if (it != sessions_.end()) persistence_.save(id, it->second->latest());
+    }
 }
 
 void MeshService::housekeeping() {
     constexpr auto kTick = std::chrono::milliseconds(100);
     std::uint64_t splits_before = metrics_.splits.value();
     Clock::time_point second_start = Clock::now();
+    Clock::time_point activity_start = second_start;
+    Clock::time_point ownership_start = second_start;
     std::unique_lock lock(housekeeping_mutex_);
     while (!stopping_) {
         housekeeping_wake_.wait_for(lock, kTick);
         if (stopping_) break;
         const Clock::time_point now = Clock::now();
         expire(now);
+        persistence_.maintain(now);
+        const bool keep = persistence_.enabled() && persistence_.available() && !shutting_down_;
+        if (now - activity_start >= activity_interval(config_)) {
+            activity_start = now;
+            if (keep) store_activity();
+        }
+        if (now - ownership_start >= kOwnershipInterval) {
+            ownership_start = now;
+            if (keep && persistence_.shared()) check_ownership();
+        }
         if (now - second_start >= std::chrono::seconds(1)) {
             const std::uint64_t splits = metrics_.splits.value();
             metrics_.splits_per_second.set(static_cast<std::int64_t>(

@@ -2,6 +2,12 @@
 // registry, the worker pool, expiry and shutdown. net/ feeds it the text of each WebSocket message
 // and drains each client's output queue; unit tests drive it directly.
 //
+// With a session store (server/session_persistence.h), a session's record is written before the
+// `created` or `updated` reply leaves, deleted when the session is closed, expires or fails, and
+// read back when a request names a session that is not live here (after a restart, or on the
+// server a load balancer now routes the session's clients to). An unshared store (SQLite) is
+// reloaded whole at start.
+//
 // Every request gets exactly one reply (`created`, `updated`, `subscribed`, `ack`, `pong` or
 // `error` with a stable code), echoing its `id`. A bad request never affects the connection or any
 // other session.
@@ -20,24 +26,30 @@
 #include "server/log.h"
 #include "server/metrics.h"
 #include "server/session.h"
+#include "server/session_persistence.h"
 #include "server/watchdog.h"
 #include "server/worker_pool.h"
 
 namespace isomesh::server {
 
-/// 128 bits from the operating system's random source: session ids are capabilities.
-protocol::SessionId random_session_id();
+/// 128 bits from the operating system's random source: session ids are capabilities. With a
+/// route, its 4 bytes come first and 96 random bits follow.
+protocol::SessionId random_session_id(const std::optional<Route>& route = std::nullopt);
 
 class MeshService {
   public:
-    /// Starts the worker pool and the housekeeping thread (expiry, splits per second).
-    MeshService(const ServerConfig& config, Logger& logger, Metrics& metrics);
+    /// Starts the worker pool and the housekeeping thread (expiry, splits per second, the
+    /// store's upkeep); reloads the sessions of an unshared `store` (none: sessions live in
+    /// memory only).
+    MeshService(const ServerConfig& config, Logger& logger, Metrics& metrics,
+                std::unique_ptr<store::SessionStore> store = nullptr);
     ~MeshService();
     MeshService(const MeshService&) = delete;
     MeshService& operator=(const MeshService&) = delete;
 
-    /// A new connection. `wakeup`: see OutputQueue.
-    std::shared_ptr<Client> connect(std::function<void()> wakeup);
+    /// A new connection. `wakeup`: see OutputQueue. `route`: the `route` of its URL.
+    std::shared_ptr<Client> connect(std::function<void()> wakeup,
+                                    std::optional<Route> route = std::nullopt);
     /// One text message from `client`.
     void receive(const std::shared_ptr<Client>& client, std::string_view text);
     /// A binary message from `client` (clients send none): answered with bad_json.
@@ -53,6 +65,8 @@ class MeshService {
     /// (`unavailable`); returns once those messages are queued or the drain timeout passed.
     void shutdown();
     bool shutting_down() const { return shutting_down_; }
+    /// Why the server should get no new connections now (draining, the store down), if so.
+    std::optional<std::string> unready() const;
 
     /// Expires sessions idle or orphaned too long at `now`. The housekeeper calls it; public for
     /// tests.
@@ -76,10 +90,30 @@ class MeshService {
     void handle(Request& request, const protocol::Resync& resync);
     void handle(Request& request, const protocol::Ping& ping);
 
-    /// The session a request names, or nothing after replying unknown_session.
+    /// The session a request names (rebuilt from the store when it is not live here), or nothing
+    /// after replying unknown_session, wrong_route or store_unavailable.
     std::shared_ptr<MeshSession> named_session(Request& request, const protocol::SessionId& id);
+    std::shared_ptr<MeshSession> restore(Request& request, const protocol::SessionId& id);
+    /// True after replying wrong_route: the connection's route is not `id`'s, whose record exists.
+    bool on_another_route(Request& request, const protocol::SessionId& id);
+    /// A live session from `record`, or nothing after replying why not.
+    std::shared_ptr<MeshSession> rebuild(Request& request, const store::SessionRecord& record);
+    /// Registers a new session (no subscriber yet).
+    std::shared_ptr<MeshSession> start_session(const protocol::SessionId& id,
+                                               FunctionVersion version);
+    void reload();
     std::shared_ptr<MeshSession> remove(const protocol::SessionId& id);
+    /// A session ended by itself (evaluation timeout, failure): gone here and from the store.
+    void ended(const protocol::SessionId& id);
+    /// Another server serves `sessions` now: their subscribers are told to go there.
+    void moved(const std::vector<protocol::SessionId>& sessions);
     void housekeeping();
+    std::vector<std::shared_ptr<MeshSession>> live_sessions() const;
+    /// Stores when live sessions were last named by a request (idle expiry after a restart).
+    void store_activity();
+    /// (A shared store.) Lets go of the sessions another server took over; writes again the
+    /// records that vanished.
+    void check_ownership();
 
     ServerConfig config_;
     Logger& logger_;
@@ -90,6 +124,9 @@ class MeshService {
     WorkerPool pool_;
     std::atomic<bool> shutting_down_{false};
     std::atomic<std::uint64_t> next_client_id_{1};
+    SessionPersistence persistence_;
+    std::mutex restore_mutex_;           // one session rebuilt at a time: never two of one id
+    Clock::time_point activity_kept_{};  // last request times stored up to here
 
     mutable std::mutex sessions_mutex_;
     std::map<protocol::SessionId, std::shared_ptr<MeshSession>> sessions_;

@@ -1,5 +1,6 @@
 #include "server/metrics.h"
 
+#include <cmath>
 #include <cstdio>
 
 namespace isomesh::server {
@@ -31,6 +32,13 @@ std::vector<double> latency_bounds() {
     return bounds;
 }
 
+/// 10 us to 10 s, ten steps per decade (store latencies: fine enough to read percentiles from).
+std::vector<double> fine_latency_bounds() {
+    std::vector<double> bounds;
+    for (int i = 0; i <= 60; ++i) bounds.push_back(1e-5 * std::pow(10.0, i / 10.0));
+    return bounds;
+}
+
 }  // namespace
 
 Histogram::Histogram(std::vector<double> bounds)
@@ -59,7 +67,11 @@ Metrics::Metrics()
     : first_mesh_seconds(latency_bounds()),
       frame_latency_seconds(latency_bounds()),
       slice_seconds(latency_bounds()),
-      encode_seconds(latency_bounds()) {}
+      encode_seconds(latency_bounds()),
+      store_write_seconds(fine_latency_bounds()),
+      store_read_seconds(fine_latency_bounds()) {
+    store_up.set(1);
+}
 
 std::string Metrics::render() const {
     std::string out;
@@ -83,6 +95,7 @@ std::string Metrics::render() const {
     gauge("busy_workers", "Workers running a refinement slice.", busy_workers);
     gauge("worker_threads", "Refinement worker threads.", worker_threads);
     gauge("splits_per_second", "Splits over the last second, all sessions.", splits_per_second);
+    gauge("store_up", "1 while the session store answers (or none is used), else 0.", store_up);
     counter("sessions_created", "Sessions created.", sessions_created);
     counter("sessions_expired", "Sessions expired (idle or without subscribers).",
             sessions_expired);
@@ -95,6 +108,9 @@ std::string Metrics::render() const {
     counter("bytes_sent", "WebSocket payload bytes written.", bytes_sent);
     counter("messages_received", "Control messages received.", messages_received);
     counter("http_requests", "HTTP requests served.", http_requests);
+    counter("sessions_restored", "Sessions rebuilt from the session store.", sessions_restored);
+    counter("store_errors", "Session store calls that failed (store down or unreachable).",
+            store_errors);
     header(out, "isomesh_errors_total", "counter", "Error replies by code.");
     for (int i = 0; i < protocol::kErrorCodeCount; ++i) {
         out += "isomesh_errors_total{code=\"" +
@@ -107,6 +123,10 @@ std::string Metrics::render() const {
               frame_latency_seconds);
     histogram("slice_seconds", "One refinement turn of one session.", slice_seconds);
     histogram("encode_seconds", "Encoding one frame.", encode_seconds);
+    histogram("store_write_seconds", "One session store write (save, remove, touch).",
+              store_write_seconds);
+    histogram("store_read_seconds", "One session store read (claim, owners, ping).",
+              store_read_seconds);
     return out;
 }
 

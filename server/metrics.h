@@ -59,6 +59,7 @@ struct Metrics {
     Gauge busy_workers;  ///< workers running a session slice
     Gauge worker_threads;
     Gauge splits_per_second;  ///< over the last second, all sessions
+    Gauge store_up;           ///< 1 while the session store answers (or there is none)
 
     // counters
     Counter sessions_created;
@@ -71,6 +72,8 @@ struct Metrics {
     Counter bytes_sent;
     Counter messages_received;
     Counter http_requests;
+    Counter sessions_restored;  ///< rebuilt from the session store
+    Counter store_errors;       ///< session store calls that failed
     std::array<Counter, protocol::kErrorCodeCount> errors;
 
     // histograms, seconds
@@ -78,6 +81,8 @@ struct Metrics {
     Histogram frame_latency_seconds;  ///< from a frame's creation to its last byte written
     Histogram slice_seconds;          ///< one refinement turn of one session
     Histogram encode_seconds;         ///< encoding one frame (Draco and id lists)
+    Histogram store_write_seconds;    ///< one session store write (save, remove, touch)
+    Histogram store_read_seconds;     ///< one session store read (claim, owners, ping)
 
     /// Every metric in the Prometheus text exposition format.
     std::string render() const;

@@ -92,11 +92,10 @@ void MeshSession::request_keyframe(const std::shared_ptr<Client>& client, bool c
 }
 
 void MeshSession::update(const protocol::Update& request, const VersionLimits& limits,
-                         const std::function<void(const VersionResult&)>& reply) {
+                         const std::function<bool(const VersionResult&)>& reply) {
     std::lock_guard serial(update_mutex_);
     VersionResult next = next_version(latest(), request, limits);
-    reply(next);
-    if (!next) return;
+    if (!reply(next) || !next) return;
     {
         std::lock_guard lock(mutex_);
         latest_ = next.value();

@@ -87,9 +87,10 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     /// A new version, cancelling the work on the current one; replaces an update not yet started.
     /// Answers an `update`: the next version (or why there is none), built from the latest one
     /// under a lock so that concurrent updates all apply.
-    /// `reply` gets the result before the new version can produce any frame.
+    /// `reply` gets the result before the new version can produce any frame, and may refuse a
+    /// valid version by returning false (its record could not be stored): it is then not applied.
     void update(const protocol::Update& request, const VersionLimits& limits,
-                const std::function<void(const VersionResult&)>& reply);
+                const std::function<bool(const VersionResult&)>& reply);
     void set_paused(bool paused);
     /// Ends the session: subscribers get `closed` with `reason` after the frames already made.
     void close(protocol::Closed::Reason reason);

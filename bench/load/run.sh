@@ -50,8 +50,11 @@ trap 'stop_server; rm -f "$server_log"' EXIT
 # Starts a fresh server; sets $port from its "listening" log line.
 start_server() {
   stop_server
+  # Sessions in memory only (each run starts afresh) unless SERVER_ARGS names a --store.
+  local store_args=(--store none)
+  case "$SERVER_ARGS" in *--store*) store_args=() ;; esac
   # shellcheck disable=SC2086  # SERVER_ARGS is a list of flags
-  "$BIN/isomesh-server" --bind 127.0.0.1 --port 0 --log-level info $SERVER_ARGS \
+  "$BIN/isomesh-server" --bind 127.0.0.1 --port 0 --log-level info "${store_args[@]}" $SERVER_ARGS \
     2>"$server_log" >/dev/null &
   server_pid=$!
   port=

@@ -81,8 +81,13 @@ class HttpSession final : public Closable, public std::enable_shared_from_this<H
 
     void upgrade() {
         const auto& request = parser_->get();
-        if (request.target() != "/ws") {
+        const std::string_view target(request.target().data(), request.target().size());
+        if (target.substr(0, target.find('?')) != "/ws") {
             return send(text_response(request, http::status::not_found, "no WebSocket here\n"));
+        }
+        auto route = route_of_target(target);
+        if (!route) {
+            return send(text_response(request, http::status::bad_request, route.error() + "\n"));
         }
         if (context_.service.shutting_down()) {
             return send(text_response(request, http::status::service_unavailable, "draining\n"));
@@ -93,7 +98,7 @@ class HttpSession final : public Closable, public std::enable_shared_from_this<H
         }
         auto connection = std::make_shared<WebSocketConnection>(stream_.release_socket(), context_);
         context_.websockets.add(connection);
-        connection->start(parser_->release());
+        connection->start(parser_->release(), route.value());
     }
 
     Response handle(const http::request<http::string_body>& request) {
@@ -105,10 +110,11 @@ class HttpSession final : public Closable, public std::enable_shared_from_this<H
         }
         const std::string_view target(request.target().data(), request.target().size());
         const std::string_view path = target.substr(0, target.find('?'));
-        if (path == "/healthz") {
-            if (context_.service.shutting_down())
-                return text_response(request, http::status::service_unavailable, "draining\n");
-            return text_response(request, http::status::ok, "ok\n");
+        if (path == "/healthz") return text_response(request, http::status::ok, "ok\n");
+        if (path == "/readyz") {
+            if (auto reason = context_.service.unready())
+                return text_response(request, http::status::service_unavailable, *reason + "\n");
+            return text_response(request, http::status::ok, "ready\n");
         }
         if (path == "/metrics") {
             return make_response(request, http::status::ok, context_.metrics.render(),

@@ -1,6 +1,7 @@
 // The network face of the server: one port for HTTP and WebSocket (Boost.Beast).
 //   /ws        WebSocket upgrade: the isomesh protocol (net/websocket_connection.h)
-//   /healthz   "ok" (503 "draining" during shutdown)
+//   /healthz   liveness: "ok" while the server answers
+//   /readyz    readiness: "ready", or 503 with the reason (draining, the session store down)
 //   /metrics   Prometheus text format
 //   anything else: the browser client's files (server/static_files.h)
 // SIGINT and SIGTERM drain: stop accepting, end sessions with `closed`, let queued frames leave

@@ -57,7 +57,9 @@ WebSocketConnection::~WebSocketConnection() {
     context_.websockets.remove(this);
 }
 
-void WebSocketConnection::start(http::request<http::string_body> request) {
+void WebSocketConnection::start(http::request<http::string_body> request,
+                                std::optional<Route> route) {
+    route_ = route;
     beast::get_lowest_layer(ws_).expires_never();  // the WebSocket stream has its own timeouts
     websocket::stream_base::timeout timeouts;
     timeouts.handshake_timeout = 30s;  // also bounds the closing handshake
@@ -76,9 +78,11 @@ void WebSocketConnection::start(http::request<http::string_body> request) {
 void WebSocketConnection::on_accept(beast::error_code ec) {
     if (ec) return fail(ec, "accept");
     std::weak_ptr<WebSocketConnection> weak = shared_from_this();
-    client_ = context_.service.connect([weak] {
-        if (auto self = weak.lock()) self->wake();
-    });
+    client_ = context_.service.connect(
+        [weak] {
+            if (auto self = weak.lock()) self->wake();
+        },
+        route_);
     context_.metrics.connections.add(1);
     context_.logger.info("connection_opened", {{"client", client_->id()}, {"remote", remote_}});
     do_read();  // always pending: it completes when the connection ends, whoever ends it

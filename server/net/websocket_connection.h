@@ -66,8 +66,8 @@ class WebSocketConnection final : public Closable,
     WebSocketConnection(tcp::socket&& socket, NetContext& context);
     ~WebSocketConnection() override;
 
-    /// Accepts the upgrade `request` and starts reading.
-    void start(http::request<http::string_body> request);
+    /// Accepts the upgrade `request` (whose URL gave `route`) and starts reading.
+    void start(http::request<http::string_body> request, std::optional<Route> route);
     void shutdown() override;
     void abort() override;
 
@@ -90,6 +90,7 @@ class WebSocketConnection final : public Closable,
     std::shared_ptr<Client> client_;
     std::optional<Outgoing> writing_;  // the message in flight
     std::string remote_;
+    std::optional<Route> route_;
     bool closing_ = false;  // close once the queue is empty
     bool close_started_ = false;
     bool ended_ = false;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <map>
 #include <thread>
 
@@ -10,8 +11,9 @@
 
 namespace isomesh::server::testing {
 
-TestConnection::TestConnection(MeshService& service) : service_(service) {
-    client = service.connect({});
+TestConnection::TestConnection(MeshService& service, std::optional<Route> route)
+    : service_(service) {
+    client = service.connect({}, route);
 }
 
 TestConnection::~TestConnection() {
@@ -77,6 +79,26 @@ std::vector<std::array<std::uint32_t, 3>> canonical_triangles(const protocol::Me
     for (const auto& [id, v] : mesh.triangles()) {
         const auto first = std::min_element(v.begin(), v.end()) - v.begin();
         out.push_back({v[first], v[(first + 1) % 3], v[(first + 2) % 3]});
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+std::vector<std::array<std::uint32_t, 9>> position_triangles(const protocol::MeshReplica& mesh) {
+    std::vector<std::array<std::uint32_t, 9>> out;
+    for (const auto& [id, v] : mesh.triangles()) {
+        std::array<std::array<std::uint32_t, 3>, 3> corners;
+        for (int c = 0; c < 3; ++c) {
+            const glm::vec3 p = mesh.vertices().at(v[c]).position;
+            corners[c] = {std::bit_cast<std::uint32_t>(p.x), std::bit_cast<std::uint32_t>(p.y),
+                          std::bit_cast<std::uint32_t>(p.z)};
+        }
+        const auto first = std::min_element(corners.begin(), corners.end()) - corners.begin();
+        std::array<std::uint32_t, 9> t;
+        for (int c = 0; c < 3; ++c)
+            std::copy(corners[(first + c) % 3].begin(), corners[(first + c) % 3].end(),
+                      t.begin() + 3 * c);
+        out.push_back(t);
     }
     std::sort(out.begin(), out.end());
     return out;

@@ -17,7 +17,8 @@ namespace isomesh::server::testing {
 
 class TestConnection {
   public:
-    explicit TestConnection(MeshService& service);
+    /// `route`: the connection's routing key, as `?route=` gives it.
+    explicit TestConnection(MeshService& service, std::optional<Route> route = std::nullopt);
     ~TestConnection();
 
     void send(std::string_view text);
@@ -69,6 +70,11 @@ class TestConnection {
 /// The replica's triangles as vertex-id triples rotated to start at their smallest id (so that the
 /// same triangle compares equal whatever its wire id or starting corner), sorted.
 std::vector<std::array<std::uint32_t, 3>> canonical_triangles(const protocol::MeshReplica& mesh);
+
+/// The replica's triangles by the bits of their corners' positions, each rotated to start at its
+/// smallest corner, sorted: equal lists mean the same triangles at bit-equal positions, whatever
+/// the ids (a rebuilt session numbers its triangles anew).
+std::vector<std::array<std::uint32_t, 9>> position_triangles(const protocol::MeshReplica& mesh);
 
 /// Empty when the replica holds the same mesh as `mesh`, whatever its ids (which depend on how
 /// often a resolving phase 1 replaced the mesh): every vertex matches one of `mesh` within one

@@ -15,14 +15,21 @@ export const SERVER_BIN = process.env.ISOMESH_SERVER_BIN ?? join(REPO, 'build/bi
 export const WEB_ROOT = process.env.ISOMESH_WEB_ROOT ?? join(REPO, 'build/web');
 
 /**
- * Resolves with {url, port, stop(), log} once the server listens. `log` collects its log lines.
+ * Resolves with {url, port, stop(), kill(), log} once the server listens (kill: SIGKILL, no drain).
+ * `log` collects its log lines.
  * Rejects if it exits or stays silent for `timeoutMs`.
  */
 export function startServer(extraArgs = [], { timeoutMs = 20000 } = {}) {
   for (const [what, path] of [['server binary', SERVER_BIN], ['web client (build/web/index.html)', join(WEB_ROOT, 'index.html')]]) {
     if (!existsSync(path)) throw new Error(`no ${what} at ${path}: run scripts/build.sh first`);
   }
-  const args = ['--bind', '127.0.0.1', '--port', '0', '--web-root', WEB_ROOT, '--threads', '2', ...extraArgs];
+  // Defaults that extraArgs do not name (sessions in memory only unless a --store is given).
+  const defaults = ['--bind', '127.0.0.1', '--port', '0', '--web-root', WEB_ROOT, '--threads', '2', '--store', 'none'];
+  const args = [];
+  for (let i = 0; i < defaults.length; i += 2) {
+    if (!extraArgs.includes(defaults[i])) args.push(defaults[i], defaults[i + 1]);
+  }
+  args.push(...extraArgs);
   const child = spawn(SERVER_BIN, args, { stdio: ['ignore', 'pipe', 'pipe'] });
   const log = [];
   let onLine = () => {};
@@ -33,6 +40,11 @@ export function startServer(extraArgs = [], { timeoutMs = 20000 } = {}) {
     });
   }
   const exited = new Promise((resolve) => child.once('exit', (code, signal) => resolve({ code, signal })));
+
+  const kill = async () => {
+    if (child.exitCode === null && child.signalCode === null) child.kill('SIGKILL');
+    return exited;
+  };
 
   const stop = async () => {
     if (child.exitCode === null && child.signalCode === null) child.kill('SIGTERM');
@@ -56,7 +68,7 @@ export function startServer(extraArgs = [], { timeoutMs = 20000 } = {}) {
       if (port === null) return;
       clearTimeout(timer);
       onLine = () => {};
-      resolve({ port, url: `http://127.0.0.1:${port}/`, stop, log });
+      resolve({ port, url: `http://127.0.0.1:${port}/`, stop, kill, log });
     };
   });
 }

@@ -5,6 +5,20 @@
 // frames are decoded and applied to their session's SessionMesh; a sequence gap or a frame that
 // cannot be applied makes the session send `resync`, and the server answers with a keyframe.
 //
+// Reconnection: when the connection drops (a server restart, a crash, a load balancer moving the
+// client) or the server says a session moved (`closed` with reason `moved`), the client opens a
+// new connection with growing delays and subscribes again to every session it follows; each gets
+// a keyframe and goes on. Requests that were in flight are sent again on the new connection when
+// sending twice does no harm (update, pause, resume, resync, subscribe, unsubscribe, close: an
+// update names the values it sets, so a second copy changes nothing but the version number);
+// `create` and `ping` in flight reject with code 'closed', since a second create would make a
+// second session. Requests made while disconnected wait for the new connection.
+//
+// Routing: the connection's URL carries `route=` (8 hex digits, random unless options.route
+// gives one). A load balancer hashes it to pick the server, and the sessions this connection
+// creates get it as the first 8 digits of their ids (routeOf), so that every client of a
+// session reaches the same server (deploy/README.md).
+//
 // The WebSocket is injectable: the browser's, or the `ws` package's in Node (both offer the same
 // onopen/onmessage/onclose/send API). Nothing here touches the DOM.
 
@@ -23,6 +37,12 @@ import {
 
 const now = () => globalThis.performance.now();
 
+/** Requests that may be sent again after a reconnection without changing the outcome. */
+const RESENDABLE = new Set(['update', 'pause', 'resume', 'resync', 'subscribe', 'unsubscribe', 'close']);
+
+/** Delays between reconnection attempts (ms), the last one repeating; each is jittered ±20 %. */
+export const RECONNECT_DELAYS_MS = Object.freeze([250, 500, 1000, 2000, 4000]);
+
 function utf8Length(text) {
   let bytes = text.length;
   for (let i = 0; i < text.length; ++i) {
@@ -30,6 +50,23 @@ function utf8Length(text) {
     if (c >= 0x80) bytes += c >= 0x800 && (c < 0xd800 || c > 0xdfff) ? 2 : 1;
   }
   return bytes;
+}
+
+/** The route of a session id: its first 8 hex digits (connect with {route} to reach its server). */
+export function routeOf(sessionId) {
+  return String(sessionId).slice(0, 8).toLowerCase();
+}
+
+function randomRoute() {
+  const bytes = new Uint8Array(4);
+  globalThis.crypto.getRandomValues(bytes);
+  return Array.from(bytes, (b) => b.toString(16).padStart(2, '0')).join('');
+}
+
+/** `url` with `route=` added to its query. */
+function routedUrl(url, route) {
+  if (!route) return url;
+  return `${url}${url.includes('?') ? '&' : '?'}route=${route}`;
 }
 
 /**
@@ -45,6 +82,11 @@ function utf8Length(text) {
  * @param {boolean} [options.deferFrames] queue binary frames instead of applying them on
  *   receipt; the application then applies them with drainFrames(deadline), e.g. a few
  *   milliseconds per animation frame, so that rendering stays smooth while refinement streams
+ * @param {string|null} [options.route] the connection's route, 8 hex digits (random by default;
+ *   routeOf(id) to reach the server of session `id`); null: none
+ * @param {boolean} [options.reconnect] reconnect and resubscribe when the connection drops (true)
+ * @param {number[]} [options.reconnectDelaysMs] delays between attempts (RECONNECT_DELAYS_MS)
+ * @param {number} [options.maxReconnectAttempts] attempts in a row before giving up (Infinity)
  * @returns {Promise<IsomeshClient>}
  */
 export function connect(url, options = {}) {
@@ -55,34 +97,55 @@ export function connect(url, options = {}) {
   if (!options.decoder || typeof options.decoder.decode !== 'function') {
     return Promise.reject(new TypeError('pass options.decoder: await loadDracoDecoder()'));
   }
-  const client = new IsomeshClient(new WebSocketImpl(url), options);
+  if (options.route != null && !/^[0-9a-fA-F]{8}$/.test(options.route)) {
+    return Promise.reject(new TypeError('options.route must be 8 hex digits'));
+  }
+  const client = new IsomeshClient(url, { ...options, WebSocket: WebSocketImpl });
   return client.opened.then(() => client);
 }
 
 export class IsomeshClient extends Emitter {
   /** Use connect(). */
-  constructor(socket, options) {
+  constructor(url, options) {
     super();
-    this.socket = socket;
+    this.url = url;
     this.decoder = options.decoder;
-    this.options = { requestTimeoutMs: 30000, autoResync: true, ...options };
+    this.options = {
+      requestTimeoutMs: 30000,
+      autoResync: true,
+      reconnect: true,
+      reconnectDelaysMs: RECONNECT_DELAYS_MS,
+      maxReconnectAttempts: Infinity,
+      ...options,
+    };
+    /** The connection's route (8 hex digits), or null. */
+    this.route = options.route === undefined ? randomRoute() : options.route && options.route.toLowerCase();
     /** Session id (hex) -> Session, for every session this connection receives. */
     this.sessions = new Map();
     this.bytesReceived = 0;
     this.framesReceived = 0;
     this.messagesReceived = 0;
+    /** True once the client is closed for good (close(), or reconnection given up). */
     this.closed = false;
-    this.pending = new Map();
+    /** True while a WebSocket is open. */
+    this.connected = false;
+    /** Completed reconnections. */
+    this.reconnects = 0;
+    this.pending = new Map(); // id -> {resolve, reject, timer, onReply, type, text, sent}
     this.nextRequestId = 1;
     this.frameQueue = []; // with deferFrames: frames not applied yet, from frameQueueHead on
     this.frameQueueHead = 0;
-    socket.binaryType = 'arraybuffer';
+    this.attempts = 0; // failed reconnection attempts in a row
+    this.reconnectTimer = null;
+    this.closing = false;
     this.opened = new Promise((resolve, reject) => {
-      socket.onopen = () => resolve();
-      socket.onerror = () => reject(new IsomeshError('unavailable', 'WebSocket connection failed'));
+      this.#open(resolve, reject);
     });
-    socket.onmessage = (event) => this.#receive(event.data);
-    socket.onclose = (event) => this.#closed(event);
+  }
+
+  /** The WebSocket of the current connection (replaced on each reconnection). */
+  get socket() {
+    return this.currentSocket;
   }
 
   /**
@@ -115,7 +178,7 @@ export class IsomeshClient extends Emitter {
    * reply, a timeout or a closed connection). The building block of every method here.
    * `onReply(reply)`, if given, runs as soon as the reply is read, before any later message or
    * frame is handled (a session must exist before its keyframe arrives), and its result is what
-   * the promise resolves with.
+   * the promise resolves with. While reconnecting, the request waits for the new connection.
    */
   request(type, fields = {}, onReply = (reply) => reply) {
     if (this.closed) return Promise.reject(new IsomeshError('closed', 'the connection is closed'));
@@ -126,14 +189,15 @@ export class IsomeshClient extends Emitter {
         this.pending.delete(id);
         reject(new IsomeshError('timeout', `no reply to ${type} within ${this.options.requestTimeoutMs} ms`));
       }, this.options.requestTimeoutMs);
-      this.pending.set(id, { resolve, reject, timer, onReply });
-      this.socket.send(text);
+      const entry = { resolve, reject, timer, onReply, type, text, sent: false };
+      this.pending.set(id, entry);
+      if (this.connected) this.#transmit(entry);
     });
   }
 
-  /** Sends a message that expects no reply (e.g. resync). */
+  /** Sends a message that expects no reply (e.g. resync); dropped while disconnected. */
   send(type, fields = {}) {
-    if (!this.closed) this.socket.send(requestText(type, undefined, fields));
+    if (this.connected) this.currentSocket.send(requestText(type, undefined, fields));
   }
 
   /**
@@ -161,10 +225,145 @@ export class IsomeshClient extends Emitter {
     return this.frameQueue.length - this.frameQueueHead;
   }
 
-  /** Closes the connection (sessions it created expire on the server unless others subscribe). */
+  /** Closes the connection for good (sessions it created expire on the server unless others subscribe). */
   close() {
-    this.socket.close(1000, 'client closed');
+    this.closing = true;
+    clearTimeout(this.reconnectTimer);
+    if (this.connected) {
+      this.currentSocket.close(1000, 'client closed');
+    } else {
+      this.#final({ code: 1000, reason: 'client closed' });
+    }
   }
+
+  // ---- connection and reconnection ---------------------------------------------------------------
+
+  /** Opens a WebSocket; `opened`/`failed` settle the attempt. */
+  #open(opened, failed) {
+    const socket = new this.options.WebSocket(routedUrl(this.url, this.route));
+    this.currentSocket = socket;
+    let open = false;
+    socket.binaryType = 'arraybuffer';
+    socket.onopen = () => {
+      open = true;
+      this.connected = true;
+      opened();
+    };
+    socket.onerror = () => {
+      if (!open) failed(new IsomeshError('unavailable', 'WebSocket connection failed'));
+    };
+    socket.onmessage = (event) => {
+      if (socket === this.currentSocket) this.#receive(event.data);
+    };
+    socket.onclose = (event) => {
+      if (socket !== this.currentSocket) return;
+      if (!open) {
+        failed(new IsomeshError('unavailable', `WebSocket connection failed (${event.code})`));
+        return;
+      }
+      this.#lost(event);
+    };
+  }
+
+  /** The open connection ended: for good, or to be reopened. */
+  #lost(event) {
+    this.connected = false;
+    if (this.closing || !this.options.reconnect) {
+      this.#final(event);
+      return;
+    }
+    for (const [id, entry] of this.pending) {
+      if (!entry.sent) continue;
+      if (RESENDABLE.has(entry.type)) {
+        entry.sent = false; // sent again on the next connection
+      } else {
+        this.pending.delete(id);
+        clearTimeout(entry.timer);
+        entry.reject(new IsomeshError('closed', `connection lost before the reply to ${entry.type}`));
+      }
+    }
+    for (const session of this.sessions.values()) session._connectionLost();
+    this.emit('disconnected', { code: event.code, reason: event.reason });
+    this.#scheduleReconnect();
+  }
+
+  #scheduleReconnect() {
+    if (this.attempts >= this.options.maxReconnectAttempts) {
+      this.#final({ code: 1006, reason: `gave up after ${this.attempts} reconnection attempts` });
+      return;
+    }
+    const delays = this.options.reconnectDelaysMs;
+    const delay = delays[Math.min(this.attempts, delays.length - 1)] * (0.8 + 0.4 * Math.random());
+    ++this.attempts;
+    this.reconnectTimer = setTimeout(() => {
+      this.#open(
+        () => this.#resume(),
+        () => {
+          if (!this.closing) this.#scheduleReconnect();
+        },
+      );
+    }, delay);
+  }
+
+  /** A new connection is open: subscribe again, then send what waited. */
+  #resume() {
+    const attempts = this.attempts;
+    this.attempts = 0;
+    ++this.reconnects;
+    for (const session of this.sessions.values()) {
+      if (!session.resubscribing) this.#resubscribe(session); // else its request is sent below
+    }
+    for (const entry of this.pending.values()) {
+      if (!entry.sent) this.#transmit(entry);
+    }
+    this.emit('reconnected', { attempts, sessions: this.sessions.size });
+  }
+
+  #resubscribe(session) {
+    const startedAt = now();
+    session.resubscribing = true;
+    this.request('subscribe', { session: session.id }, (reply) => {
+      session.resubscribing = false;
+      session._setState(sessionState(reply), startedAt);
+      session.emit('resubscribed', session.state);
+      return session;
+    }).catch((error) => {
+      session.resubscribing = false;
+      if (this.closed || this.sessions.get(session.id) !== session) return;
+      if (error.code === 'store_unavailable' || error.code === 'timeout' || error.code === 'closed') {
+        // The server cannot load it now: try again (a lost connection resubscribes anyway).
+        if (error.code !== 'closed') setTimeout(() => this.connected && this.#resubscribe(session), 1000);
+        return;
+      }
+      this.sessions.delete(session.id);
+      session._onMessage({ type: 'closed', session: session.id, reason: 'lost', error });
+    });
+  }
+
+  /** The server says a session moved: reconnect (the load balancer picks its new server). */
+  #moved() {
+    if (!this.connected || this.closing || !this.options.reconnect) return;
+    this.currentSocket.close(4000, 'session moved');
+  }
+
+  #transmit(entry) {
+    entry.sent = true;
+    this.currentSocket.send(entry.text);
+  }
+
+  #final(event) {
+    this.closed = true;
+    this.connected = false;
+    const error = new IsomeshError('closed', `connection closed (${event.code}${event.reason ? `: ${event.reason}` : ''})`);
+    for (const { reject, timer } of this.pending.values()) {
+      clearTimeout(timer);
+      reject(error);
+    }
+    this.pending.clear();
+    this.emit('close', { code: event.code, reason: event.reason });
+  }
+
+  // ---- messages and frames -----------------------------------------------------------------------
 
   #adopt(reply, startedAt) {
     let session = this.sessions.get(reply.session);
@@ -200,26 +399,40 @@ export class IsomeshClient extends Emitter {
     }
     this.emit('message', message);
     if (REPLY_TYPES.has(message.type) && message.id !== undefined && this.pending.has(message.id)) {
-      const { resolve, reject, timer, onReply } = this.pending.get(message.id);
-      this.pending.delete(message.id);
-      clearTimeout(timer);
-      if (message.type === 'error') {
-        reject(errorFromReply(message));
-        return;
-      }
-      try {
-        resolve(onReply(message));
-      } catch (error) {
-        reject(error);
-      }
+      this.#settle(message);
       return;
     }
     const session = message.session !== undefined ? this.sessions.get(message.session) : undefined;
-    if (session) {
+    if (session && message.type === 'closed' && message.reason === 'moved' && this.options.reconnect) {
+      session.emit('moved', message);
+      this.#moved();
+    } else if (session) {
       session._onMessage(message);
       if (message.type === 'closed') this.sessions.delete(message.session);
     } else if (message.type === 'error') {
       this.emit('error', errorFromReply(message));
+    }
+  }
+
+  /** A reply to pending request `message.id`. */
+  #settle(message) {
+    const entry = this.pending.get(message.id);
+    if (message.type === 'error' && message.code === 'wrong_route' && RESENDABLE.has(entry.type) &&
+        entry.type !== 'subscribe' && this.options.reconnect) {
+      entry.sent = false; // the session moved to another server: sent again after reconnecting
+      this.#moved();
+      return;
+    }
+    this.pending.delete(message.id);
+    clearTimeout(entry.timer);
+    if (message.type === 'error') {
+      entry.reject(errorFromReply(message));
+      return;
+    }
+    try {
+      entry.resolve(entry.onReply(message));
+    } catch (error) {
+      entry.reject(error);
     }
   }
 
@@ -245,17 +458,6 @@ export class IsomeshClient extends Emitter {
     if (session) session._onBadFrame(error);
     else this.emit('error', error);
   }
-
-  #closed(event) {
-    this.closed = true;
-    const error = new IsomeshError('closed', `connection closed (${event.code}${event.reason ? `: ${event.reason}` : ''})`);
-    for (const { reject, timer } of this.pending.values()) {
-      clearTimeout(timer);
-      reject(error);
-    }
-    this.pending.clear();
-    this.emit('close', { code: event.code, reason: event.reason });
-  }
 }
 
 /**
@@ -269,7 +471,11 @@ export class IsomeshClient extends Emitter {
  *   'converged'  (message)           the constraints are met for message.version
  *   'resync'     ({reason})          a gap or a bad frame: a keyframe was asked for
  *   'error'      (IsomeshError)      an error about this session that answers no request
- *   'closed'     (message)           the session ended (message.reason)
+ *   'disconnected' ()                the connection dropped; the client reconnects
+ *   'moved'      (message)           the server says the session moved; the client reconnects
+ *   'resubscribed' (state)           subscribed again after a reconnection (a keyframe follows)
+ *   'closed'     (message)           the session ended (message.reason; 'lost' when it could not
+ *                                    be subscribed again after a reconnection)
  */
 export class Session extends Emitter {
   constructor(client, id, meshOptions) {
@@ -284,6 +490,7 @@ export class Session extends Emitter {
     this.stats = { bytes: 0, frames: 0, keyframes: 0, deltas: 0, resyncs: 0, firstMeshMs: null, lastFrameAt: null };
     this.pendingUpdates = 0;
     this.resyncPending = false;
+    this.resubscribing = false; // a subscribe after a reconnection awaits its reply
     this.versionStart = null; // {startedAt, version} of the last request awaiting its first mesh
   }
 
@@ -386,6 +593,15 @@ export class Session extends Emitter {
     } else if (outcome === Outcome.gap || outcome === Outcome.inconsistent) {
       this.#lostStep(outcome);
     }
+  }
+
+  /** The connection dropped: the mesh stays on hand, not known to be final until resubscribed. */
+  _connectionLost() {
+    this.lastConverged = null;
+    this.lastProgress = null;
+    this.resyncPending = false;
+    this.stats.lastFrameAt = null; // the first mesh after resubscribing is timed from its request
+    this.emit('disconnected');
   }
 
   _onBadFrame(error) {

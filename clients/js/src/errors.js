@@ -35,4 +35,6 @@ export const ERROR_CODES = Object.freeze([
   'unavailable',
   'internal',
   'bad_frame',
+  'store_unavailable',
+  'wrong_route',
 ]);

@@ -1,6 +1,6 @@
 // isomesh-client: a small client library for the isomesh protocol (see ../README.md).
 
-export { connect, IsomeshClient, Session } from './client.js';
+export { connect, IsomeshClient, Session, routeOf, RECONNECT_DELAYS_MS } from './client.js';
 export { loadDracoDecoder } from './draco_loader.js';
 export { DracoMeshDecoder } from './draco.js';
 export { IsomeshError, ERROR_CODES } from './errors.js';

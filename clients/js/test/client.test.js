@@ -4,7 +4,7 @@
 import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
-import { connect } from '../src/client.js';
+import { connect, routeOf } from '../src/client.js';
 import { FakeMeshDecoder, SESSION, buildFrame, vertex } from './support.js';
 
 class FakeSocket {
@@ -38,6 +38,15 @@ class FakeSocket {
 
   lastSent() {
     return this.sent[this.sent.length - 1];
+  }
+}
+
+/** Resolves when `predicate()` holds (polled every millisecond, for at most 2 s). */
+async function until(predicate) {
+  const end = Date.now() + 2000;
+  while (!predicate()) {
+    if (Date.now() > end) throw new Error('timed out');
+    await new Promise((resolve) => setTimeout(resolve, 1));
   }
 }
 
@@ -203,4 +212,81 @@ test('deferred frames wait for drainFrames and apply in order', async () => {
   assert.equal(client.drainFrames(), 0);
   assert.equal(session.mesh.triangleCount, 0);
   assert.equal(session.mesh.sequence, 2);
+});
+
+test('the URL carries the route; sessions have their route', async () => {
+  const client = await connect('ws://127.0.0.1:1/ws', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder(), route: '0A1B2C3D' });
+  assert.equal(FakeSocket.last.url, 'ws://127.0.0.1:1/ws?route=0a1b2c3d');
+  assert.equal(client.route, '0a1b2c3d');
+  assert.equal(routeOf('0a1b2c3d445566778899aabbccddeeff'), '0a1b2c3d');
+  const random = await connect('ws://h/ws?x=1', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder() });
+  assert.match(FakeSocket.last.url, /^ws:\/\/h\/ws\?x=1&route=[0-9a-f]{8}$/);
+  assert.equal(random.route.length, 8);
+  await connect('ws://h/ws', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder(), route: null });
+  assert.equal(FakeSocket.last.url, 'ws://h/ws');
+  await assert.rejects(connect('ws://h/ws', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder(), route: 'xyz' }), /8 hex digits/);
+});
+
+test('a dropped connection reconnects, resubscribes and sends again the update in flight; a create in flight rejects', async () => {
+  const client = await connect('ws://h/ws', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder(), reconnectDelaysMs: [1] });
+  const first = FakeSocket.last;
+  const session = await created(client, first);
+  first.frame({ kind: 'keyframe', sequence: 0, triangleIds: [1, 2], mesh: square });
+  const update = session.update({ parameters: { a: 2 } });
+  const create = client.create({ expression: 'x=0', box: state.box });
+  const events = [];
+  client.on('disconnected', () => events.push('disconnected'));
+  client.on('reconnected', () => events.push('reconnected'));
+  first.onclose({ code: 1006, reason: '' }); // the server is gone
+  await assert.rejects(create, (e) => e.code === 'closed');
+  assert.equal(client.connected, false);
+  await until(() => FakeSocket.last !== first && client.connected);
+  const second = FakeSocket.last;
+  assert.equal(second.url, first.url, 'the same route');
+  assert.deepEqual(events, ['disconnected', 'reconnected']);
+  assert.deepEqual(second.sent.map((m) => [m.type, m.session]), [['subscribe', SESSION], ['update', SESSION]]);
+  assert.deepEqual(second.sent[1].parameters, { a: 2 });
+  second.reply({ type: 'subscribed', id: second.sent[0].id, session: SESSION, ...state });
+  second.reply({ type: 'updated', id: second.sent[1].id, session: SESSION, ...state, version: 2, parameters: { a: 2 } });
+  assert.equal((await update).version, 2);
+  second.frame({ kind: 'keyframe', sequence: 0, triangleIds: [7], mesh: { vertices: square.vertices.slice(0, 3), triangles: [[1, 2, 3]] } });
+  assert.equal(session.mesh.triangleCount, 1, 'the keyframe of the rebuilt session applies');
+  assert.ok(session.stats.firstMeshMs >= 0, 'timed from the new subscribe');
+  assert.equal(client.sessions.get(SESSION), session);
+  client.close();
+});
+
+test('closed with reason moved reconnects; a session that cannot be resubscribed is lost', async () => {
+  const client = await connect('ws://h/ws', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder(), reconnectDelaysMs: [1] });
+  const first = FakeSocket.last;
+  const session = await created(client, first);
+  const seen = [];
+  session.on('moved', () => seen.push('moved'));
+  session.on('closed', (m) => seen.push(`closed ${m.reason}`));
+  first.reply({ type: 'closed', session: SESSION, reason: 'moved' });
+  await until(() => FakeSocket.last !== first && client.connected);
+  const second = FakeSocket.last;
+  assert.equal(second.sent[0].type, 'subscribe');
+  second.reply({ type: 'error', id: second.sent[0].id, session: SESSION, code: 'unknown_session', message: 'gone' });
+  await until(() => seen.length === 2);
+  assert.deepEqual(seen, ['moved', 'closed lost']);
+  assert.equal(client.sessions.size, 0);
+  client.close();
+});
+
+test('requests made while disconnected wait for the new connection; close() ends it all', async () => {
+  const client = await connect('ws://h/ws', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder(), reconnectDelaysMs: [50] });
+  const first = FakeSocket.last;
+  first.onclose({ code: 1006, reason: '' });
+  const ping = client.ping();
+  await until(() => FakeSocket.last !== first && client.connected);
+  assert.equal(FakeSocket.last.sent[0].type, 'ping');
+  FakeSocket.last.reply({ type: 'pong', id: FakeSocket.last.sent[0].id, time_us: 1 });
+  assert.equal((await ping).serverTimeUs, 1);
+  let closed = false;
+  client.on('close', () => (closed = true));
+  client.close();
+  await until(() => closed);
+  assert.equal(client.closed, true);
+  await assert.rejects(client.ping(), (e) => e.code === 'closed');
 });

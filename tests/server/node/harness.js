@@ -41,17 +41,19 @@ export async function until(predicate, { timeoutMs = 20000, everyMs = 10, what =
 }
 
 /**
- * Starts isomesh-server with `args` added to the test defaults. Resolves with a handle:
- * {port, pid, wsUrl, httpUrl, log, stop(), metrics(), status()}.
+ * Starts isomesh-server with `args` added to the test defaults (sessions in memory only unless
+ * `args` name a --store). Resolves with a handle:
+ * {port, pid, wsUrl, httpUrl, log, stop(), kill(), metrics(), status()}.
+ * `env`: the server's environment; `bare`: no default arguments (configured by `env` alone).
  */
-export function startServer(args = [], { timeoutMs = 20000 } = {}) {
-  const defaults = ['--bind', '127.0.0.1', '--port', '0', '--threads', '2', '--web-root', ''];
+export function startServer(args = [], { timeoutMs = 20000, env = process.env, bare = false } = {}) {
+  const defaults = bare ? [] : ['--bind', '127.0.0.1', '--port', '0', '--threads', '2', '--web-root', '', '--store', 'none'];
   const fullArgs = [];
   for (let i = 0; i < defaults.length; i += 2) {
     if (!args.includes(defaults[i])) fullArgs.push(defaults[i], defaults[i + 1]);
   }
   fullArgs.push(...args);
-  const child = spawn(join(BIN_DIR, 'isomesh-server'), fullArgs, { stdio: ['ignore', 'ignore', 'pipe'] });
+  const child = spawn(join(BIN_DIR, 'isomesh-server'), fullArgs, { stdio: ['ignore', 'ignore', 'pipe'], env });
   const log = [];
   const exited = new Promise((resolve) => child.once('exit', (code, signal) => resolve({ code, signal })));
   return new Promise((resolve, reject) => {
@@ -87,6 +89,15 @@ function serverHandle(child, port, log, exited) {
     wsUrl: `ws://127.0.0.1:${port}/ws`,
     log,
     exited,
+    /** True until the process exits. */
+    get alive() {
+      return child.exitCode === null && child.signalCode === null;
+    },
+    /** SIGKILL (kill -9): no drain, nothing flushed; resolves once the process is gone. */
+    async kill() {
+      if (child.exitCode === null && child.signalCode === null) child.kill('SIGKILL');
+      return exited;
+    },
     /** SIGTERM, then SIGKILL after 10 s; resolves with {code, signal}. */
     async stop() {
       if (child.exitCode === null && child.signalCode === null) child.kill('SIGTERM');
@@ -145,6 +156,24 @@ export async function convergedAt(session, version, timeoutMs = 30000) {
 /** The triangles of a SessionMesh as vertex-id triples, each rotated to start at its smallest id. */
 export function canonicalTriangles(mesh) {
   return mesh.sortedTriangles().map(({ vertices }) => rotated(vertices)).sort(compareTriples);
+}
+
+/**
+ * The triangles of a SessionMesh by the bits of their corners' float32 positions, each rotated to
+ * start at its smallest corner (orientation kept), sorted: equal lists mean the same triangles at
+ * bit-equal positions, whatever the triangle and vertex ids (a rebuilt session numbers anew).
+ */
+export function positionTriangles(mesh) {
+  const { positions, indices } = mesh.toIndexed();
+  const bits = new Uint32Array(positions.buffer, positions.byteOffset, positions.length);
+  const corner = (v) => `${bits[3 * v].toString(16)},${bits[3 * v + 1].toString(16)},${bits[3 * v + 2].toString(16)}`;
+  const out = [];
+  for (let t = 0; t < indices.length; t += 3) {
+    const c = [corner(indices[t]), corner(indices[t + 1]), corner(indices[t + 2])];
+    const first = c.indexOf([...c].sort()[0]);
+    out.push(`${c[first]} ${c[(first + 1) % 3]} ${c[(first + 2) % 3]}`);
+  }
+  return out.sort();
 }
 
 function rotated(v) {

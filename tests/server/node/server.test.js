@@ -205,7 +205,7 @@ describe('resources', () => {
     await withServer(['--orphan-timeout', '0.5'], async (server) => {
       await until(async () => (await server.metrics()).get('isomesh_connections') === 0);
       const threadsBefore = server.status().threads;
-      const connection = await client(server);
+      const connection = await client(server, { reconnect: false }); // gone for good
       const session = await connection.create({
         expression: 'x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8=0',
         box: BOX,
