@@ -46,4 +46,9 @@ struct BatchStep {
 void run_batch_steps(std::span<const BatchStep> steps, const double* const* read,
                      double* const* write, std::size_t n);
 
+/// run_batch_steps for a single point (n = 1), with the same operations: bit-identical values,
+/// without the loops' overhead.
+void run_point_steps(std::span<const BatchStep> steps, const double* const* read,
+                     double* const* write);
+
 }  // namespace isomesh

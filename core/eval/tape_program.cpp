@@ -6,6 +6,7 @@
 #include "eval/tape_program.h"
 
 #include <cassert>
+#include <cmath>
 #include <limits>
 
 #include "eval/tape_ops.h"
@@ -82,7 +83,8 @@ TapeProgram make_program(std::vector<Instruction> code) {
     for (std::size_t i = 0; i < n; ++i) {
         const Instruction& ins = c[i];
         if (!live[i] || is_leaf(ins.op)) continue;
-        if (ins.op == Op::Min || ins.op == Op::Max) ++program.choices;
+        if (ins.op == Op::Min || ins.op == Op::Max)
+            program.choice_slots.push_back(static_cast<std::uint32_t>(i));
         BatchForm form = form_of(c, ins);
         if (form != BatchForm::ImmediateA) in_register[ins.a] = true, last_use[ins.a] = i;
         if (is_binary(ins.op) && form != BatchForm::ImmediateB)
@@ -111,6 +113,8 @@ TapeProgram make_program(std::vector<Instruction> code) {
             step.b = is_binary(ins.op) && form != BatchForm::ImmediateB ? reg[ins.b] : 0;
             if (form == BatchForm::ImmediateA) step.imm = c[ins.a].imm;
             if (form == BatchForm::ImmediateB) step.imm = c[ins.b].imm;
+            if (form != BatchForm::Registers && !std::isfinite(step.imm))
+                program.finite_immediates = false;
         }
         // The result gets its register before the operands' are released, so a step never
         // writes an array it reads (run_batch_steps' precondition).

@@ -1,0 +1,237 @@
+#include "eval/tape_evaluator.h"
+
+#include <algorithm>
+#include <bit>
+#include <cassert>
+#include <cmath>
+
+#include "eval/batch_kernels.h"
+#include "eval/tape_simplify.h"
+
+namespace isomesh {
+
+namespace {
+
+std::size_t register_count(const TapeProgram& program) {
+    return kFirstScratchRegister + program.scratch_registers;
+}
+
+/// Whether batches of boxes run the kIntervalLanes-wide kernels (else box by box).
+constexpr bool kWideBatches = false;
+
+bool same_box(const Box& a, const Box& b) {
+    return a.lo == b.lo && a.hi == b.hi;
+}
+
+/// Sets registers 0-2 to x, y and z over the boxes (with the unit vectors as their gradients);
+/// lanes past the last box repeat box 0.
+template <std::size_t W, class Register>
+void load_boxes(Register* registers, std::span<const Box> boxes) {
+    for (std::size_t l = 0; l < W; ++l) {
+        const Box& box = boxes[l < boxes.size() ? l : 0];
+        for (int axis = 0; axis < 3; ++axis) {
+            Register& r = registers[axis];
+            r.lo[l] = box.lo[axis];
+            r.hi[l] = box.hi[axis];
+            r.flags[l] = 0;
+            if constexpr (requires { r.grad_lo; }) {
+                for (int k = 0; k < 3; ++k) {
+                    r.grad_lo[k][l] = k == axis ? 1.0 : 0.0;
+                    r.grad_hi[k][l] = k == axis ? 1.0 : 0.0;
+                }
+            }
+        }
+    }
+}
+
+template <std::size_t W>
+IntervalValue lane_result(const IntervalRegister<W>& r, std::size_t l) {
+    return {{r.lo[l], r.hi[l]},
+            (r.flags[l] & kMaybeDiscontinuous) != 0,
+            (r.flags[l] & kMaybeUndefined) != 0};
+}
+
+template <std::size_t W>
+IntervalGradient lane_result(const GradientRegister<W>& r, std::size_t l) {
+    IntervalGradient g;
+    g.value = {{r.lo[l], r.hi[l]},
+               (r.flags[l] & kMaybeDiscontinuous) != 0,
+               (r.flags[l] & kMaybeUndefined) != 0};
+    for (int k = 0; k < 3; ++k) g.gradient[k] = {r.grad_lo[k][l], r.grad_hi[k][l]};
+    return g;
+}
+
+template <std::size_t W>
+std::uint32_t run_kernel(const TapeProgram& p, IntervalRegister<W>* r, Choice* choices) {
+    return run_interval_steps(p.steps, r, choices, p.choice_slots.size());
+}
+
+template <std::size_t W>
+std::uint32_t run_kernel(const TapeProgram& p, GradientRegister<W>* r, Choice* choices) {
+    return run_gradient_steps(p.steps, r, choices, p.choice_slots.size());
+}
+
+void run_reference(ReferenceEvaluation& e, const TapeProgram& p, const Box& box,
+                   std::span<Choice> choices, IntervalValue& out) {
+    out = e.interval(p, box, choices);
+}
+
+void run_reference(ReferenceEvaluation& e, const TapeProgram& p, const Box& box,
+                   std::span<Choice> choices, IntervalGradient& out) {
+    out = e.interval_gradient(p, box, choices);
+}
+
+}  // namespace
+
+TapeEvaluator::TapeEvaluator(std::shared_ptr<const TapeProgram> program, bool simplify,
+                             bool reference)
+    : simplify_(simplify), reference_(reference) {
+    stack_.push_back(std::move(program));
+}
+
+double TapeEvaluator::value(const glm::dvec3& p) {
+    const TapeProgram& program = top();
+    if (reference_) return reference_evaluation_.value(program, p);
+    prepare_point_registers(program);
+    point_registers_[0] = p.x;
+    point_registers_[1] = p.y;
+    point_registers_[2] = p.z;
+    run_point_steps(program.steps, point_read_.data(), point_write_.data());
+    return point_registers_[kOutputRegister];
+}
+
+void TapeEvaluator::values(const PointBatch& points, std::span<double> out) {
+    const std::size_t n = points.size();
+    assert(points.y.size() == n && points.z.size() == n && out.size() == n);
+    const TapeProgram& program = top();
+    prepare_batch_registers(program);
+    for (std::size_t start = 0; start < n; start += kBatchBlock) {
+        const std::size_t count = std::min(kBatchBlock, n - start);
+        read_[0] = points.x.data() + start;
+        read_[1] = points.y.data() + start;
+        read_[2] = points.z.data() + start;
+        write_[kOutputRegister] = out.data() + start;
+        run_batch_steps(program.steps, read_.data(), write_.data(), count);
+    }
+}
+
+ValueGradient TapeEvaluator::value_gradient(const glm::dvec3& p) {
+    return reference_evaluation_.value_gradient(top(), p);
+}
+
+IntervalValue TapeEvaluator::interval(const Box& box) {
+    IntervalValue out;
+    intervals({&box, 1}, {&out, 1});
+    return out;
+}
+
+IntervalGradient TapeEvaluator::interval_gradient(const Box& box) {
+    IntervalGradient out;
+    interval_gradients({&box, 1}, {&out, 1});
+    return out;
+}
+
+void TapeEvaluator::intervals(std::span<const Box> boxes, std::span<IntervalValue> out) {
+    evaluate_batch(boxes, out, interval_registers_, interval_lane_registers_);
+}
+
+void TapeEvaluator::interval_gradients(std::span<const Box> boxes,
+                                       std::span<IntervalGradient> out) {
+    evaluate_batch(boxes, out, gradient_registers_, gradient_lane_registers_);
+}
+
+template <class Result, class Narrow, class Wide>
+void TapeEvaluator::evaluate_batch(std::span<const Box> boxes, std::span<Result> out,
+                                   Narrow& narrow, Wide& wide) {
+    assert(boxes.size() == out.size());
+    if (boxes.size() == 1 || !kWideBatches) {
+        for (std::size_t i = 0; i < boxes.size(); ++i)
+            evaluate_boxes<1>(boxes.subspan(i, 1), out.subspan(i, 1), narrow);
+        return;
+    }
+    for (std::size_t start = 0; start < boxes.size(); start += kIntervalLanes) {
+        const std::size_t count = std::min(kIntervalLanes, boxes.size() - start);
+        evaluate_boxes<kIntervalLanes>(boxes.subspan(start, count), out.subspan(start, count),
+                                       wide);
+    }
+}
+
+template <std::size_t W, class Register, class Result>
+void TapeEvaluator::evaluate_boxes(std::span<const Box> boxes, std::span<Result> out,
+                                   std::vector<Register>& registers) {
+    assert(!boxes.empty() && boxes.size() <= W);
+    choices_program_ = stack_.back();
+    const TapeProgram& program = top();
+    const std::size_t choice_count = program.choice_slots.size();
+    choices_boxes_.assign(boxes.begin(), boxes.end());
+    choices_.resize(W * choice_count);
+    std::uint32_t to_reference = (1u << boxes.size()) - 1;
+    if (!reference_ && program.finite_immediates) {
+        registers.resize(std::max(registers.size(), register_count(program)));
+        load_boxes<W>(registers.data(), boxes);
+        to_reference &= run_kernel(program, registers.data(), choices_.data());
+        counts_.boxes += boxes.size();
+        counts_.by_reference += static_cast<std::size_t>(std::popcount(to_reference));
+    }
+    for (std::size_t l = 0; l < boxes.size(); ++l) {
+        std::span<Choice> lane_choices(choices_.data() + l * choice_count, choice_count);
+        if (to_reference >> l & 1)
+            run_reference(reference_evaluation_, program, boxes[l], lane_choices, out[l]);
+        else
+            out[l] = lane_result(registers[kOutputRegister], l);
+    }
+}
+
+std::span<const Choice> TapeEvaluator::choices_on(const Box& box) {
+    const std::size_t choice_count = top().choice_slots.size();
+    if (choices_program_ == stack_.back()) {
+        for (std::size_t l = 0; l < choices_boxes_.size(); ++l)
+            if (same_box(choices_boxes_[l], box))
+                return {choices_.data() + l * choice_count, choice_count};
+    }
+    interval(box);
+    return {choices_.data(), choice_count};
+}
+
+void TapeEvaluator::push(const Box& box) {
+    if (!simplify_) return;
+    std::shared_ptr<const TapeProgram> current = stack_.back();
+    if (!current->choice_slots.empty()) {
+        auto simplified = simplify_on_box(current->code, current->choice_slots, choices_on(box));
+        if (simplified)
+            current = std::make_shared<const TapeProgram>(make_program(std::move(*simplified)));
+    }
+    stack_.push_back(std::move(current));
+}
+
+void TapeEvaluator::pop() {
+    if (!simplify_) return;
+    assert(stack_.size() > 1 && "pop() without push()");
+    if (stack_.size() > 1) stack_.pop_back();
+}
+
+void TapeEvaluator::prepare_point_registers(const TapeProgram& program) {
+    const std::size_t count = register_count(program);
+    if (point_registers_.size() >= count) return;
+    point_registers_.resize(count);
+    point_read_.resize(count);
+    point_write_.resize(count);
+    for (std::size_t r = 0; r < count; ++r) {
+        point_write_[r] = &point_registers_[r];
+        point_read_[r] = point_write_[r];
+    }
+}
+
+void TapeEvaluator::prepare_batch_registers(const TapeProgram& program) {
+    const std::size_t count = register_count(program);
+    if (scratch_.size() < program.scratch_registers * kBatchBlock)
+        scratch_.resize(program.scratch_registers * kBatchBlock);
+    read_.resize(count);
+    write_.resize(count);
+    for (std::size_t r = kFirstScratchRegister; r < count; ++r) {
+        write_[r] = scratch_.data() + (r - kFirstScratchRegister) * kBatchBlock;
+        read_[r] = write_[r];
+    }
+}
+
+}  // namespace isomesh
