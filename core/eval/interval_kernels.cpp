@@ -35,32 +35,29 @@ struct LaneTypes<1> {
     ISOMESH_MEMBER static M splat_mask(std::int64_t c) { return c; }
 };
 
+/// Lanes computed together: one AVX2 register of doubles (two SSE2 registers in the default
+/// build). kIntervalLanes lanes are computed as kIntervalLanes / kChunk chunks: wider vectors
+/// spill.
+constexpr std::size_t kChunk = 4;
+
 template <>
-struct LaneTypes<kIntervalLanes> {
-    static_assert(kIntervalLanes == 8);
-    typedef double D __attribute__((vector_size(8 * kIntervalLanes)));
-    typedef std::int64_t M __attribute__((vector_size(8 * kIntervalLanes)));
-    ISOMESH_MEMBER static D splat(double c) { return D{c, c, c, c, c, c, c, c}; }
-    ISOMESH_MEMBER static M splat_mask(std::int64_t c) { return M{c, c, c, c, c, c, c, c}; }
+struct LaneTypes<kChunk> {
+    typedef double D __attribute__((vector_size(8 * kChunk)));
+    typedef std::int64_t M __attribute__((vector_size(8 * kChunk)));
+    ISOMESH_MEMBER static D splat(double c) { return D{c, c, c, c}; }
+    ISOMESH_MEMBER static M splat_mask(std::int64_t c) { return M{c, c, c, c}; }
 };
 
-template <class T, std::size_t W>
-ISOMESH_KERNEL T load(const double (&p)[W]) {
+/// The lanes of a register's array from `p` on, as a lane value.
+template <class T, class U>
+ISOMESH_KERNEL T load(const U* p) {
     T v;
     std::memcpy(&v, p, sizeof v);
     return v;
 }
 
-template <class T, std::size_t W>
-ISOMESH_KERNEL T load(const std::int64_t (&p)[W]) {
-    T v;
-    std::memcpy(&v, p, sizeof v);
-    return v;
-}
-
-template <class T, class U, std::size_t W>
-ISOMESH_KERNEL void store(U (&p)[W], const T& v) {
-    static_assert(sizeof(T) == sizeof p);
+template <class T, class U>
+ISOMESH_KERNEL void store(U* p, const T& v) {
     std::memcpy(p, &v, sizeof v);
 }
 
@@ -71,14 +68,6 @@ ISOMESH_KERNEL auto lane(const T& v, std::size_t l) {
         return (void)l, v;
     else
         return v[l];
-}
-
-template <class T, class U>
-ISOMESH_KERNEL void set_lane(T& v, std::size_t l, U x) {
-    if constexpr (std::is_arithmetic_v<T>)
-        (void)l, v = x;
-    else
-        v[l] = x;
 }
 
 /// A mask as the integer mask type, all bits set in a true lane as vector comparisons give (a
@@ -225,20 +214,28 @@ ISOMESH_KERNEL IntervalValue lane_value(const Ends<D>& e, const M& flags, std::s
         {lane(e.lo, l), lane(e.hi, l)}, (f & kMaybeDiscontinuous) != 0, (f & kMaybeUndefined) != 0};
 }
 
-template <class D, class M>
-ISOMESH_KERNEL void set_lane_value(Value<D, M>& v, std::size_t l, const IntervalValue& x) {
-    set_lane(v.ends.lo, l, x.value.lo);
-    set_lane(v.ends.hi, l, x.value.hi);
-    set_lane(v.flags, l,
-             (x.maybe_discontinuous ? kMaybeDiscontinuous : 0) |
-                 (x.maybe_undefined ? kMaybeUndefined : 0));
-}
+/// Lane values computed one lane at a time (by the reference code), gathered into lane values.
+template <std::size_t V>
+struct LaneResults {
+    double lo[V];
+    double hi[V];
+    std::int64_t flags[V];
 
-template <class D>
-ISOMESH_KERNEL void set_lane_ends(Ends<D>& e, std::size_t l, const Interval& x) {
-    set_lane(e.lo, l, x.lo);
-    set_lane(e.hi, l, x.hi);
-}
+    ISOMESH_MEMBER void set(std::size_t l, const IntervalValue& x) {
+        lo[l] = x.value.lo;
+        hi[l] = x.value.hi;
+        flags[l] = (x.maybe_discontinuous ? kMaybeDiscontinuous : 0) |
+                   (x.maybe_undefined ? kMaybeUndefined : 0);
+    }
+    template <class D>
+    ISOMESH_MEMBER Ends<D> ends() const {
+        return {load<D>(lo), load<D>(hi)};
+    }
+    template <class D, class M>
+    ISOMESH_MEMBER Value<D, M> value() const {
+        return {ends<D>(), load<M>(flags)};
+    }
+};
 
 /// Unary `op` over all lanes: the common operations by formulas exact on finite operands, the
 /// others lane by lane with the reference code itself (inlined for `op`).
@@ -259,17 +256,18 @@ ISOMESH_KERNEL Value<D, M> unary_value(const Ends<D>& a, const M& flags, double 
         // negative a gives sqrt(a.hi) = NaN, a lane the reference recomputes (as empty).
         const auto negative_part = a.lo < D{};
         const Ends<D> r{negative_part ? D{} : a.lo, a.hi};  // std::max(a.lo, 0.0)
-        Value<D, M> v{r, flags | (as_mask<M>(negative_part) & L::splat_mask(kMaybeUndefined))};
+        LaneResults<W> roots;
         for (std::size_t l = 0; l < W; ++l) {
-            set_lane(v.ends.lo, l, std::sqrt(lane(r.lo, l)));
-            set_lane(v.ends.hi, l, std::sqrt(lane(r.hi, l)));
+            roots.lo[l] = std::sqrt(lane(r.lo, l));
+            roots.hi[l] = std::sqrt(lane(r.hi, l));
         }
-        return v;
+        return {roots.template ends<D>(),
+                flags | (as_mask<M>(negative_part) & L::splat_mask(kMaybeUndefined))};
     } else {
-        Value<D, M> v;
+        LaneResults<W> r;
         for (std::size_t l = 0; l < W; ++l)
-            set_lane_value(v, l, interval_ranges::unary(op, lane_value(a, flags, l), imm));
-        return v;
+            r.set(l, interval_ranges::unary(op, lane_value(a, flags, l), imm));
+        return r.template value<D, M>();
     }
 }
 
@@ -293,12 +291,10 @@ ISOMESH_KERNEL Value<D, M> binary_value(const Ends<D>& a, const M& fa, const End
     } else if constexpr (op == Op::Max) {
         return {{fold_max(a.lo, b.lo), fold_max(a.hi, b.hi)}, flags};
     } else {
-        Value<D, M> v;
-        for (std::size_t l = 0; l < W; ++l) {
-            set_lane_value(v, l,
-                           interval_ranges::binary(op, lane_value(a, fa, l), lane_value(b, fb, l)));
-        }
-        return v;
+        LaneResults<W> r;
+        for (std::size_t l = 0; l < W; ++l)
+            r.set(l, interval_ranges::binary(op, lane_value(a, fa, l), lane_value(b, fb, l)));
+        return r.template value<D, M>();
     }
 }
 
@@ -326,22 +322,23 @@ ISOMESH_KERNEL void record_choice(const Ends<D>& a, const M& fa, const Ends<D>& 
     }
 }
 
-/// The register file over W lanes, and the lanes whose results go to the reference.
-template <std::size_t W, class Register>
+/// V lanes of the register file, from lane `offset` on, and which of them go to the reference.
+template <std::size_t V, class Register>
 struct Lanes {
-    using D = typename LaneTypes<W>::D;
-    using M = typename LaneTypes<W>::M;
+    using D = typename LaneTypes<V>::D;
+    using M = typename LaneTypes<V>::M;
     Register* registers;
-    M bad{};
+    std::size_t offset;
+    M bad;
 
     ISOMESH_MEMBER Ends<D> ends(std::uint32_t r) const {
-        return {load<D>(registers[r].lo), load<D>(registers[r].hi)};
+        return {load<D>(registers[r].lo + offset), load<D>(registers[r].hi + offset)};
     }
-    ISOMESH_MEMBER M flags(std::uint32_t r) const { return load<M>(registers[r].flags); }
+    ISOMESH_MEMBER M flags(std::uint32_t r) const { return load<M>(registers[r].flags + offset); }
     ISOMESH_MEMBER void store_value(std::uint32_t r, const Value<D, M>& v) {
-        store(registers[r].lo, v.ends.lo);
-        store(registers[r].hi, v.ends.hi);
-        store(registers[r].flags, v.flags);
+        store(registers[r].lo + offset, v.ends.lo);
+        store(registers[r].hi + offset, v.ends.hi);
+        store(registers[r].flags + offset, v.flags);
         bad |= as_mask<M>(nonfinite(v.ends));
     }
 
@@ -350,7 +347,7 @@ struct Lanes {
     template <bool in_register>
     ISOMESH_MEMBER Ends<D> operand(std::uint32_t r, double imm) const {
         if constexpr (in_register) return ends(r);
-        const D c = LaneTypes<W>::splat(imm);
+        const D c = LaneTypes<V>::splat(imm);
         return {c, c};
     }
     template <bool in_register>
@@ -363,28 +360,26 @@ struct Lanes {
 /// A Const step's value: interval_constant(c) in every lane.
 template <std::size_t W>
 ISOMESH_KERNEL auto constant_value(double c) {
-    Value<typename LaneTypes<W>::D, typename LaneTypes<W>::M> v;
-    for (std::size_t l = 0; l < W; ++l) set_lane_value(v, l, interval_constant(c));
-    return v;
+    LaneResults<W> r;
+    for (std::size_t l = 0; l < W; ++l) r.set(l, interval_constant(c));
+    return r.template value<typename LaneTypes<W>::D, typename LaneTypes<W>::M>();
 }
 
-/// One step of the interval evaluator over W lanes (a visitor of dispatch_step).
-template <std::size_t W>
+/// One step of the interval evaluator over V lanes of the register file (see Chunked).
+template <std::size_t V, class Register>
 struct IntervalStep {
-    using D = typename LaneTypes<W>::D;
-    using M = typename LaneTypes<W>::M;
+    using D = typename LaneTypes<V>::D;
+    using M = typename LaneTypes<V>::M;
     const BatchStep& s;
-    Lanes<W, IntervalRegister<W>>& lanes;
-    Choice* choice;  // this step's, for lane 0 (a min or max)
+    Lanes<V, Register>& lanes;
+    Choice* choice;  // this step's, for the first of the V lanes (a min or max)
     std::size_t choice_stride;
 
-    ISOMESH_MEMBER void constant() { lanes.store_value(s.out, constant_value<W>(s.imm)); }
-
-    ISOMESH_MEMBER void variable() { lanes.registers[s.out] = lanes.registers[s.a]; }
+    ISOMESH_MEMBER void constant() { lanes.store_value(s.out, constant_value<V>(s.imm)); }
 
     template <Op op>
     ISOMESH_MEMBER void unary() {
-        lanes.store_value(s.out, unary_value<W, op>(lanes.ends(s.a), lanes.flags(s.a), s.imm));
+        lanes.store_value(s.out, unary_value<V, op>(lanes.ends(s.a), lanes.flags(s.a), s.imm));
     }
 
     template <Op op, BatchForm form>
@@ -395,35 +390,35 @@ struct IntervalStep {
         const Ends<D> b = lanes.template operand<b_in_register>(s.b, s.imm);
         const M fa = lanes.template operand_flags<a_in_register>(s.a);
         const M fb = lanes.template operand_flags<b_in_register>(s.b);
-        lanes.store_value(s.out, binary_value<W, op>(a, fa, b, fb, lanes.bad));
+        lanes.store_value(s.out, binary_value<V, op>(a, fa, b, fb, lanes.bad));
         if constexpr (op == Op::Min || op == Op::Max)
-            record_choice<W, op>(a, fa, b, fb, choice, choice_stride);
+            record_choice<V, op>(a, fa, b, fb, choice, choice_stride);
     }
 };
 
-/// One step of the interval forward-mode evaluator over W lanes (a visitor of dispatch_step):
-/// the value as IntervalStep computes it, then each gradient component from the partial
-/// derivatives of forward_mode.h.
-template <std::size_t W>
+/// One step of the interval forward-mode evaluator over V lanes of the register file: the value
+/// as IntervalStep computes it, then each gradient component from the partial derivatives of
+/// forward_mode.h.
+template <std::size_t V, class Register>
 struct GradientStep {
-    using D = typename LaneTypes<W>::D;
-    using M = typename LaneTypes<W>::M;
-    using Register = GradientRegister<W>;
+    using D = typename LaneTypes<V>::D;
+    using M = typename LaneTypes<V>::M;
     const BatchStep& s;
-    Lanes<W, Register>& lanes;
+    Lanes<V, Register>& lanes;
     Choice* choice;
     std::size_t choice_stride;
 
     template <bool in_register>
     ISOMESH_MEMBER Ends<D> gradient(std::uint32_t r, int k) const {
         if constexpr (in_register)
-            return {load<D>(lanes.registers[r].grad_lo[k]), load<D>(lanes.registers[r].grad_hi[k])};
+            return {load<D>(lanes.registers[r].grad_lo[k] + lanes.offset),
+                    load<D>(lanes.registers[r].grad_hi[k] + lanes.offset)};
         return {D{}, D{}};
     }
 
     ISOMESH_MEMBER void store_gradient(int k, const Ends<D>& g) {
-        store(lanes.registers[s.out].grad_lo[k], g.lo);
-        store(lanes.registers[s.out].grad_hi[k], g.hi);
+        store(lanes.registers[s.out].grad_lo[k] + lanes.offset, g.lo);
+        store(lanes.registers[s.out].grad_hi[k] + lanes.offset, g.hi);
         lanes.bad |= as_mask<M>(nonfinite(g));
     }
 
@@ -432,17 +427,15 @@ struct GradientStep {
     }
 
     ISOMESH_MEMBER void constant() {
-        lanes.store_value(s.out, constant_value<W>(s.imm));
+        lanes.store_value(s.out, constant_value<V>(s.imm));
         for (int k = 0; k < 3; ++k) store_gradient(k, {D{}, D{}});
     }
-
-    ISOMESH_MEMBER void variable() { lanes.registers[s.out] = lanes.registers[s.a]; }
 
     template <Op op>
     ISOMESH_MEMBER void unary() {
         const Ends<D> a = lanes.ends(s.a);
         const M fa = lanes.flags(s.a);
-        const Value<D, M> r = unary_value<W, op>(a, fa, s.imm);
+        const Value<D, M> r = unary_value<V, op>(a, fa, s.imm);
         lanes.store_value(s.out, r);
         const Ends<D> partial = unary_partial<op>(a, fa, r);
         check(partial);
@@ -456,7 +449,7 @@ struct GradientStep {
     template <Op op>
     ISOMESH_MEMBER Ends<D> unary_partial(const Ends<D>& a, const M& fa,
                                          const Value<D, M>& r) const {
-        using L = LaneTypes<W>;
+        using L = LaneTypes<V>;
         if constexpr (op == Op::Neg) {
             return {L::splat(-1.0), L::splat(-1.0)};  // term_minus_one applies it
         } else if constexpr (op == Op::Square) {
@@ -475,29 +468,28 @@ struct GradientStep {
         } else if constexpr (op == Op::Ln) {
             return div({L::splat(1.0), L::splat(1.0)}, a);  // a holding 0: an infinite value
         } else {
-            Ends<D> p;
-            for (std::size_t l = 0; l < W; ++l) {
-                const IntervalValue partial = forward_mode::unary_partial(
-                    op, lane_value(a, fa, l), lane_value(r.ends, r.flags, l), s.imm);
-                set_lane_ends(p, l, partial.value);
+            LaneResults<V> p;
+            for (std::size_t l = 0; l < V; ++l) {
+                p.set(l, forward_mode::unary_partial(op, lane_value(a, fa, l),
+                                                     lane_value(r.ends, r.flags, l), s.imm));
             }
-            return p;
+            return p.template ends<D>();
         }
     }
 
     template <Op op, BatchForm form>
     ISOMESH_MEMBER void binary() {
-        using L = LaneTypes<W>;
+        using L = LaneTypes<V>;
         constexpr bool a_in_register = form != BatchForm::ImmediateA;
         constexpr bool b_in_register = form != BatchForm::ImmediateB;
         const Ends<D> a = lanes.template operand<a_in_register>(s.a, s.imm);
         const Ends<D> b = lanes.template operand<b_in_register>(s.b, s.imm);
         const M fa = lanes.template operand_flags<a_in_register>(s.a);
         const M fb = lanes.template operand_flags<b_in_register>(s.b);
-        const Value<D, M> r = binary_value<W, op>(a, fa, b, fb, lanes.bad);
+        const Value<D, M> r = binary_value<V, op>(a, fa, b, fb, lanes.bad);
         lanes.store_value(s.out, r);
         if constexpr (op == Op::Min || op == Op::Max) {
-            record_choice<W, op>(a, fa, b, fb, choice, choice_stride);
+            record_choice<V, op>(a, fa, b, fb, choice, choice_stride);
             const auto pick_a = a_wins<op>(a, b);
             const auto pick_b = a_wins<op>(b, a);
             for (int k = 0; k < 3; ++k) {
@@ -522,7 +514,7 @@ struct GradientStep {
             }
             return;
         }
-        Ends<D> da, db;  // the partial derivatives
+        Ends<D> da{}, db{};  // the partial derivatives
         if constexpr (op == Op::Mul) {
             da = b;
             db = a;
@@ -531,12 +523,15 @@ struct GradientStep {
             const Ends<D> q = div(r.ends, b);
             db = {-q.hi, -q.lo};
         } else {
-            for (std::size_t l = 0; l < W; ++l) {
+            LaneResults<V> pa, pb;
+            for (std::size_t l = 0; l < V; ++l) {
                 const auto p = forward_mode::binary_partials(
                     op, lane_value(a, fa, l), lane_value(b, fb, l), lane_value(r.ends, r.flags, l));
-                set_lane_ends(da, l, p.da.value);
-                set_lane_ends(db, l, p.db.value);
+                pa.set(l, p.da);
+                pb.set(l, p.db);
             }
+            da = pa.template ends<D>();
+            db = pb.template ends<D>();
         }
         check(da);
         check(db);
@@ -547,33 +542,58 @@ struct GradientStep {
     }
 };
 
-/// Registers 0-2 (the box) must be finite too.
-template <std::size_t W, class Register>
-ISOMESH_KERNEL void check_leaves(Lanes<W, Register>& lanes) {
-    for (std::uint32_t r = 0; r < 3; ++r)
-        lanes.bad |= as_mask<typename Lanes<W, Register>::M>(nonfinite(lanes.ends(r)));
-}
+/// A visitor of dispatch_step running Step on W lanes as W / V chunks of V lanes, V being as wide
+/// as a vector register (see kChunk).
+template <std::size_t W, template <std::size_t, class> class Step, class Register>
+struct Chunked {
+    static constexpr std::size_t V = W == 1 ? 1 : kChunk;
+    static constexpr std::size_t kChunks = W / V;
+    const BatchStep& s;
+    Lanes<V, Register> (&chunks)[kChunks];
+    Choice* choice;
+    std::size_t choice_stride;
 
-template <std::size_t W, class Register>
-ISOMESH_KERNEL std::uint32_t lane_mask(const Lanes<W, Register>& lanes) {
-    std::uint32_t mask = 0;
-    for (std::size_t l = 0; l < W; ++l)
-        mask |= static_cast<std::uint32_t>(lane(lanes.bad, l) != 0) << l;
-    return mask;
-}
+    ISOMESH_MEMBER Step<V, Register> chunk(std::size_t c) {
+        return {s, chunks[c], choice + chunks[c].offset * choice_stride, choice_stride};
+    }
+    ISOMESH_MEMBER void constant() {
+        for (std::size_t c = 0; c < kChunks; ++c) chunk(c).constant();
+    }
+    ISOMESH_MEMBER void variable() { chunks[0].registers[s.out] = chunks[0].registers[s.a]; }
+    template <Op op>
+    ISOMESH_MEMBER void unary() {
+        for (std::size_t c = 0; c < kChunks; ++c) chunk(c).template unary<op>();
+    }
+    template <Op op, BatchForm form>
+    ISOMESH_MEMBER void binary() {
+        for (std::size_t c = 0; c < kChunks; ++c) chunk(c).template binary<op, form>();
+    }
+};
 
-template <std::size_t W, template <std::size_t> class Step, class Register>
+template <std::size_t W, template <std::size_t, class> class Step, class Register>
 ISOMESH_KERNEL std::uint32_t run(std::span<const BatchStep> steps, Register* registers,
                                  Choice* choices, std::size_t choice_count) {
-    Lanes<W, Register> lanes{registers};
-    check_leaves(lanes);
+    using Visitor = Chunked<W, Step, Register>;
+    constexpr std::size_t V = Visitor::V;
+    Lanes<V, Register> chunks[Visitor::kChunks];
+    for (std::size_t c = 0; c < Visitor::kChunks; ++c) {
+        chunks[c].registers = registers;
+        chunks[c].offset = c * V;
+        chunks[c].bad = typename LaneTypes<V>::M{};
+        for (std::uint32_t r = 0; r < 3; ++r)  // the box must be finite too
+            chunks[c].bad |= as_mask<typename LaneTypes<V>::M>(nonfinite(chunks[c].ends(r)));
+    }
     Choice* choice = choices;
     for (const BatchStep& s : steps) {
-        Step<W> step{s, lanes, choice, choice_count};
-        dispatch_step(s, step);
+        Visitor visitor{s, chunks, choice, choice_count};
+        dispatch_step(s, visitor);
         if (s.op == Op::Min || s.op == Op::Max) ++choice;
     }
-    return lane_mask(lanes);
+    std::uint32_t mask = 0;
+    for (std::size_t c = 0; c < Visitor::kChunks; ++c)
+        for (std::size_t l = 0; l < V; ++l)
+            mask |= static_cast<std::uint32_t>(lane(chunks[c].bad, l) != 0) << (c * V + l);
+    return mask;
 }
 
 }  // namespace

@@ -17,7 +17,7 @@ std::size_t register_count(const TapeProgram& program) {
 }
 
 /// Whether batches of boxes run the kIntervalLanes-wide kernels (else box by box).
-constexpr bool kWideBatches = false;
+constexpr bool kWideBatches = true;
 
 bool same_box(const Box& a, const Box& b) {
     return a.lo == b.lo && a.hi == b.hi;
