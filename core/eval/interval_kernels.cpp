@@ -7,84 +7,18 @@
 // vector); `m ? a : b` selects lane by lane for both.
 #include "eval/interval_kernels.h"
 
-#include <cstring>
-#include <type_traits>
-
 #include "eval/forward_mode.h"
 #include "eval/interval_ranges.h"
+#include "eval/lane_types.h"
 #include "eval/step_dispatch.h"
-
-// Vectors are passed between inlined functions of this file only: no ABI is involved.
-#pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace isomesh {
 
 namespace {
 
-#define ISOMESH_KERNEL [[gnu::always_inline]] inline
-#define ISOMESH_MEMBER [[gnu::always_inline]]
-
-template <std::size_t W>
-struct LaneTypes;
-
-template <>
-struct LaneTypes<1> {
-    using D = double;
-    using M = std::int64_t;
-    ISOMESH_MEMBER static D splat(double c) { return c; }
-    ISOMESH_MEMBER static M splat_mask(std::int64_t c) { return c; }
-};
-
-/// Lanes computed together: one AVX2 register of doubles (two SSE2 registers in the default
-/// build). kIntervalLanes lanes are computed as kIntervalLanes / kChunk chunks: wider vectors
-/// spill.
-constexpr std::size_t kChunk = 4;
-
-template <>
-struct LaneTypes<kChunk> {
-    typedef double D __attribute__((vector_size(8 * kChunk)));
-    typedef std::int64_t M __attribute__((vector_size(8 * kChunk)));
-    ISOMESH_MEMBER static D splat(double c) { return D{c, c, c, c}; }
-    ISOMESH_MEMBER static M splat_mask(std::int64_t c) { return M{c, c, c, c}; }
-};
-
-/// The lanes of a register's array from `p` on, as a lane value.
-template <class T, class U>
-ISOMESH_KERNEL T load(const U* p) {
-    T v;
-    std::memcpy(&v, p, sizeof v);
-    return v;
-}
-
-template <class T, class U>
-ISOMESH_KERNEL void store(U* p, const T& v) {
-    std::memcpy(p, &v, sizeof v);
-}
-
-/// Lane l of a lane value.
-template <class T>
-ISOMESH_KERNEL auto lane(const T& v, std::size_t l) {
-    if constexpr (std::is_arithmetic_v<T>)
-        return (void)l, v;
-    else
-        return v[l];
-}
-
-/// A mask as the integer mask type, all bits set in a true lane as vector comparisons give (a
-/// scalar comparison gives a bool).
-template <class M, class Mask>
-ISOMESH_KERNEL M as_mask(const Mask& m) {
-    if constexpr (std::is_arithmetic_v<M>)
-        return m ? M(-1) : M(0);
-    else
-        return m;
-}
-
-/// Lanes whose value is infinite or NaN.
-template <class D>
-ISOMESH_KERNEL auto nonfinite(const D& x) {
-    return x - x != D{};
-}
+using namespace lanes;
+using lanes::nonfinite;  // overloaded below for intervals
+static_assert(kIntervalLanes % kChunk == 0);
 
 /// An interval over all lanes.
 template <class D>
@@ -376,6 +310,9 @@ struct IntervalStep {
     std::size_t choice_stride;
 
     ISOMESH_MEMBER void constant() { lanes.store_value(s.out, constant_value<V>(s.imm)); }
+    ISOMESH_MEMBER void variable() {
+        lanes.store_value(s.out, {lanes.ends(s.a), lanes.flags(s.a)});
+    }
 
     template <Op op>
     ISOMESH_MEMBER void unary() {
@@ -429,6 +366,10 @@ struct GradientStep {
     ISOMESH_MEMBER void constant() {
         lanes.store_value(s.out, constant_value<V>(s.imm));
         for (int k = 0; k < 3; ++k) store_gradient(k, {D{}, D{}});
+    }
+    ISOMESH_MEMBER void variable() {
+        lanes.store_value(s.out, {lanes.ends(s.a), lanes.flags(s.a)});
+        for (int k = 0; k < 3; ++k) store_gradient(k, gradient<true>(s.a, k));
     }
 
     template <Op op>
@@ -542,41 +483,13 @@ struct GradientStep {
     }
 };
 
-/// A visitor of dispatch_step running Step on W lanes as W / V chunks of V lanes, V being as wide
-/// as a vector register (see kChunk).
-template <std::size_t W, template <std::size_t, class> class Step, class Register>
-struct Chunked {
-    static constexpr std::size_t V = W == 1 ? 1 : kChunk;
-    static constexpr std::size_t kChunks = W / V;
-    const BatchStep& s;
-    Lanes<V, Register> (&chunks)[kChunks];
-    Choice* choice;
-    std::size_t choice_stride;
-
-    ISOMESH_MEMBER Step<V, Register> chunk(std::size_t c) {
-        return {s, chunks[c], choice + chunks[c].offset * choice_stride, choice_stride};
-    }
-    ISOMESH_MEMBER void constant() {
-        for (std::size_t c = 0; c < kChunks; ++c) chunk(c).constant();
-    }
-    ISOMESH_MEMBER void variable() { chunks[0].registers[s.out] = chunks[0].registers[s.a]; }
-    template <Op op>
-    ISOMESH_MEMBER void unary() {
-        for (std::size_t c = 0; c < kChunks; ++c) chunk(c).template unary<op>();
-    }
-    template <Op op, BatchForm form>
-    ISOMESH_MEMBER void binary() {
-        for (std::size_t c = 0; c < kChunks; ++c) chunk(c).template binary<op, form>();
-    }
-};
-
 template <std::size_t W, template <std::size_t, class> class Step, class Register>
 ISOMESH_KERNEL std::uint32_t run(std::span<const BatchStep> steps, Register* registers,
                                  Choice* choices, std::size_t choice_count) {
-    using Visitor = Chunked<W, Step, Register>;
-    constexpr std::size_t V = Visitor::V;
-    Lanes<V, Register> chunks[Visitor::kChunks];
-    for (std::size_t c = 0; c < Visitor::kChunks; ++c) {
+    constexpr std::size_t V = W == 1 ? 1 : kChunk;
+    constexpr std::size_t kChunks = W / V;
+    Lanes<V, Register> chunks[kChunks];
+    for (std::size_t c = 0; c < kChunks; ++c) {
         chunks[c].registers = registers;
         chunks[c].offset = c * V;
         chunks[c].bad = typename LaneTypes<V>::M{};
@@ -585,12 +498,21 @@ ISOMESH_KERNEL std::uint32_t run(std::span<const BatchStep> steps, Register* reg
     }
     Choice* choice = choices;
     for (const BatchStep& s : steps) {
-        Visitor visitor{s, chunks, choice, choice_count};
+        struct {
+            const BatchStep& s;
+            Lanes<V, Register> (&chunks)[kChunks];
+            Choice* choice;
+            std::size_t stride;
+            ISOMESH_MEMBER Step<V, Register> operator()(std::size_t c) const {
+                return {s, chunks[c], choice + chunks[c].offset * stride, stride};
+            }
+        } make{s, chunks, choice, choice_count};
+        Chunked<kChunks, decltype(make)> visitor{make};
         dispatch_step(s, visitor);
         if (s.op == Op::Min || s.op == Op::Max) ++choice;
     }
     std::uint32_t mask = 0;
-    for (std::size_t c = 0; c < Visitor::kChunks; ++c)
+    for (std::size_t c = 0; c < kChunks; ++c)
         for (std::size_t l = 0; l < V; ++l)
             mask |= static_cast<std::uint32_t>(lane(chunks[c].bad, l) != 0) << (c * V + l);
     return mask;

@@ -92,11 +92,11 @@ TapeEvaluator::TapeEvaluator(std::shared_ptr<const TapeProgram> program, bool si
 double TapeEvaluator::value(const glm::dvec3& p) {
     const TapeProgram& program = top();
     if (reference_) return reference_evaluation_.value(program, p);
-    prepare_point_registers(program);
+    point_registers_.resize(std::max(point_registers_.size(), register_count(program)));
     point_registers_[0] = p.x;
     point_registers_[1] = p.y;
     point_registers_[2] = p.z;
-    run_point_steps(program.steps, point_read_.data(), point_write_.data());
+    run_point_steps(program.steps, point_registers_.data());
     return point_registers_[kOutputRegister];
 }
 
@@ -116,7 +116,49 @@ void TapeEvaluator::values(const PointBatch& points, std::span<double> out) {
 }
 
 ValueGradient TapeEvaluator::value_gradient(const glm::dvec3& p) {
-    return reference_evaluation_.value_gradient(top(), p);
+    if (reference_) return reference_evaluation_.value_gradient(top(), p);
+    ValueGradient out;
+    value_gradients({{&p.x, 1}, {&p.y, 1}, {&p.z, 1}}, {&out, 1}, gradient_point_registers_);
+    return out;
+}
+
+void TapeEvaluator::value_gradients(const PointBatch& points, std::span<ValueGradient> out) {
+    const std::size_t n = points.size();
+    assert(points.y.size() == n && points.z.size() == n && out.size() == n);
+    if (reference_) return Evaluator::value_gradients(points, out);
+    for (std::size_t start = 0; start < n; start += kPointLanes) {
+        const std::size_t count = std::min(kPointLanes, n - start);
+        const PointBatch part{points.x.subspan(start, count), points.y.subspan(start, count),
+                              points.z.subspan(start, count)};
+        if (count == 1)
+            value_gradients(part, out.subspan(start, 1), gradient_point_registers_);
+        else
+            value_gradients(part, out.subspan(start, count), gradient_lane_point_registers_);
+    }
+}
+
+template <std::size_t W>
+void TapeEvaluator::value_gradients(const PointBatch& points, std::span<ValueGradient> out,
+                                    std::vector<PointRegister<W>>& registers) {
+    const TapeProgram& program = top();
+    registers.resize(std::max(registers.size(), register_count(program)));
+    for (std::size_t l = 0; l < W; ++l) {
+        const std::size_t i = l < points.size() ? l : 0;
+        const double p[3] = {points.x[i], points.y[i], points.z[i]};
+        for (int axis = 0; axis < 3; ++axis) {
+            registers[axis].value[l] = p[axis];
+            for (int k = 0; k < 3; ++k) registers[axis].grad[k][l] = k == axis ? 1.0 : 0.0;
+        }
+    }
+    run_point_gradient_steps(program.steps, registers.data());
+    const PointRegister<W>& r = registers[kOutputRegister];
+    for (std::size_t l = 0; l < points.size(); ++l) {
+        const double v = r.value[l];
+        if (std::isnan(v))
+            out[l] = {v, glm::dvec3(v)};  // no gradient where f is undefined
+        else
+            out[l] = {v, {r.grad[0][l], r.grad[1][l], r.grad[2][l]}};
+    }
 }
 
 IntervalValue TapeEvaluator::interval(const Box& box) {
@@ -208,18 +250,6 @@ void TapeEvaluator::pop() {
     if (!simplify_) return;
     assert(stack_.size() > 1 && "pop() without push()");
     if (stack_.size() > 1) stack_.pop_back();
-}
-
-void TapeEvaluator::prepare_point_registers(const TapeProgram& program) {
-    const std::size_t count = register_count(program);
-    if (point_registers_.size() >= count) return;
-    point_registers_.resize(count);
-    point_read_.resize(count);
-    point_write_.resize(count);
-    for (std::size_t r = 0; r < count; ++r) {
-        point_write_[r] = &point_registers_[r];
-        point_read_[r] = point_write_[r];
-    }
 }
 
 void TapeEvaluator::prepare_batch_registers(const TapeProgram& program) {

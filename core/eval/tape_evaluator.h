@@ -10,6 +10,7 @@
 
 #include "eval/evaluator.h"
 #include "eval/interval_kernels.h"
+#include "eval/point_kernels.h"
 #include "eval/reference_evaluation.h"
 #include "eval/tape_field.h"
 #include "eval/tape_program.h"
@@ -27,6 +28,7 @@ class TapeEvaluator final : public Evaluator {
     IntervalValue interval(const Box& box) override;
     ValueGradient value_gradient(const glm::dvec3& p) override;
     IntervalGradient interval_gradient(const Box& box) override;
+    void value_gradients(const PointBatch& points, std::span<ValueGradient> out) override;
     void intervals(std::span<const Box> boxes, std::span<IntervalValue> out) override;
     void interval_gradients(std::span<const Box> boxes, std::span<IntervalGradient> out) override;
     void push(const Box& box) override;
@@ -51,8 +53,10 @@ class TapeEvaluator final : public Evaluator {
     /// The choices interval evaluation proves on `box` with the top program: those of the last
     /// batch when it held the box, else from a new evaluation.
     std::span<const Choice> choices_on(const Box& box);
-    /// Points the single-point registers' read and write arrays at their memory.
-    void prepare_point_registers(const TapeProgram& program);
+    /// Runs the point-gradient kernel over up to W points (lanes past the last repeat point 0).
+    template <std::size_t W>
+    void value_gradients(const PointBatch& points, std::span<ValueGradient> out,
+                         std::vector<PointRegister<W>>& registers);
     /// Points the batch registers at this evaluator's block memory.
     void prepare_batch_registers(const TapeProgram& program);
 
@@ -63,12 +67,13 @@ class TapeEvaluator final : public Evaluator {
 
     // Point values.
     std::vector<double> point_registers_;
-    std::vector<const double*> point_read_;
-    std::vector<double*> point_write_;
     // Batch values.
     std::vector<double> scratch_;
     std::vector<const double*> read_;
     std::vector<double*> write_;
+    // Point-gradient kernels, one point or kPointLanes at a time.
+    std::vector<PointRegister<1>> gradient_point_registers_;
+    std::vector<PointRegister<kPointLanes>> gradient_lane_point_registers_;
     // Interval kernels, one box or kIntervalLanes at a time.
     std::vector<IntervalRegister<1>> interval_registers_;
     std::vector<IntervalRegister<kIntervalLanes>> interval_lane_registers_;

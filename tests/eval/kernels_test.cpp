@@ -80,7 +80,7 @@ std::string describe(const Box& b) {
     return out.str();
 }
 
-class IntervalKernels : public ::testing::TestWithParam<Case> {
+class Kernels : public ::testing::TestWithParam<Case> {
   protected:
     std::unique_ptr<Evaluator> make(bool reference, bool simplify = false) const {
         const Case& c = GetParam();
@@ -96,7 +96,7 @@ class IntervalKernels : public ::testing::TestWithParam<Case> {
     }
 };
 
-TEST_P(IntervalKernels, match_reference_bitwise) {
+TEST_P(Kernels, match_reference_bitwise) {
     auto fast = make(false), reference = make(true);
     const std::vector<Box> all = boxes(21, 400);
     std::vector<IntervalValue> batch(kIntervalLanes);
@@ -123,7 +123,7 @@ TEST_P(IntervalKernels, match_reference_bitwise) {
 
 // Simplification from the kernels' choices (reused from the batch that just evaluated the box, or
 // from a new evaluation) specialises the tape exactly as the reference's choices do.
-TEST_P(IntervalKernels, simplify_as_reference) {
+TEST_P(Kernels, simplify_as_reference) {
     auto fast = make(false, true), reference = make(true, true);
     const std::vector<Box> all = boxes(22, 160);
     std::vector<IntervalGradient> batch(kIntervalLanes);
@@ -142,7 +142,32 @@ TEST_P(IntervalKernels, simplify_as_reference) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(AllFunctions, IntervalKernels, ::testing::ValuesIn(cases()),
+TEST_P(Kernels, point_gradients_match_reference_bitwise) {
+    auto fast = make(false), reference = make(true);
+    Rng rng(23);
+    std::vector<glm::dvec3> points = GetParam().special;
+    std::uniform_real_distribution<double> u(-GetParam().scale, GetParam().scale);
+    for (int i = 0; i < 300; ++i) points.emplace_back(u(rng), u(rng), u(rng));
+    std::vector<double> x, y, z;
+    for (const auto& p : points) x.push_back(p.x), y.push_back(p.y), z.push_back(p.z);
+    std::vector<ValueGradient> batch(points.size());
+    fast->value_gradients({x, y, z}, batch);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const ValueGradient expected = reference->value_gradient(points[i]);
+        const ValueGradient single = fast->value_gradient(points[i]);
+        ASSERT_TRUE(same_value(fast->value(points[i]), reference->value(points[i])));
+        for (const ValueGradient& got : {single, batch[i]}) {
+            ASSERT_TRUE(same_value(got.value, expected.value));
+            for (int k = 0; k < 3; ++k) {
+                ASSERT_TRUE(same_value(got.gradient[k], expected.gradient[k]))
+                    << "d/d"
+                    << "xyz"[k] << " " << got.gradient[k] << " vs " << expected.gradient[k];
+            }
+        }
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllFunctions, Kernels, ::testing::ValuesIn(cases()),
                          [](const ::testing::TestParamInfo<Case>& info) {
                              return info.param.name;
                          });
