@@ -205,11 +205,11 @@ ISOMESH_KERNEL Value<D, M> unary_value(const Ends<D>& a, const M& flags, double 
     }
 }
 
-/// Binary `op` over all lanes, as unary_value. A division by an interval holding 0 is left to the
-/// reference (`bad` is set).
+/// Binary `op` over all lanes, as unary_value. A division by an interval holding 0 is the
+/// caller's to recompute with the reference code.
 template <std::size_t W, Op op, class D, class M>
 ISOMESH_KERNEL Value<D, M> binary_value(const Ends<D>& a, const M& fa, const Ends<D>& b,
-                                        const M& fb, M& bad) {
+                                        const M& fb) {
     const M flags = fa | fb;
     if constexpr (op == Op::Add) {
         return {add(a, b), flags};
@@ -218,7 +218,6 @@ ISOMESH_KERNEL Value<D, M> binary_value(const Ends<D>& a, const M& fa, const End
     } else if constexpr (op == Op::Mul) {
         return {mul(a, b), flags};
     } else if constexpr (op == Op::Div) {
-        bad |= as_mask<M>((b.lo <= D{}) & (b.hi >= D{}));
         return {div(a, b), flags};
     } else if constexpr (op == Op::Min) {
         return {{fold_min(a.lo, b.lo), fold_min(a.hi, b.hi)}, flags};
@@ -256,24 +255,45 @@ ISOMESH_KERNEL void record_choice(const Ends<D>& a, const M& fa, const Ends<D>& 
     }
 }
 
-/// V lanes of the register file, from lane `offset` on, and which of them go to the reference.
+/// A register flag bit internal to the kernels: some value or gradient enclosure of the register
+/// is not finite in the lane. The steps reading it recompute that lane with the reference code.
+constexpr std::int64_t kNotFinite = 4;
+
+/// V lanes of the register file, from lane `offset` on.
 template <std::size_t V, class Register>
 struct Lanes {
     using D = typename LaneTypes<V>::D;
     using M = typename LaneTypes<V>::M;
     Register* registers;
     std::size_t offset;
-    M bad;
+    std::size_t by_reference;  // lane-steps recomputed by the reference code
 
     ISOMESH_MEMBER Ends<D> ends(std::uint32_t r) const {
         return {load<D>(registers[r].lo + offset), load<D>(registers[r].hi + offset)};
     }
     ISOMESH_MEMBER M flags(std::uint32_t r) const { return load<M>(registers[r].flags + offset); }
-    ISOMESH_MEMBER void store_value(std::uint32_t r, const Value<D, M>& v) {
+    /// Stores a value with its flags, kNotFinite set where its ends (or `more`) are not finite.
+    template <class Mask>
+    ISOMESH_MEMBER void store_value(std::uint32_t r, const Value<D, M>& v, const Mask& more) {
         store(registers[r].lo + offset, v.ends.lo);
         store(registers[r].hi + offset, v.ends.hi);
-        store(registers[r].flags + offset, v.flags);
-        bad |= as_mask<M>(nonfinite(v.ends));
+        const M not_finite = as_mask<M>(nonfinite(v.ends) | more);
+        store(registers[r].flags + offset, (v.flags & LaneTypes<V>::splat_mask(~kNotFinite)) |
+                                               (not_finite & LaneTypes<V>::splat_mask(kNotFinite)));
+    }
+    ISOMESH_MEMBER void store_value(std::uint32_t r, const Value<D, M>& v) {
+        store_value(r, v, M{});
+    }
+    /// Sets lane l of register r to the reference's value.
+    ISOMESH_MEMBER void set_lane(std::uint32_t r, std::size_t l, const IntervalValue& v,
+                                 bool more_not_finite = false) {
+        Register& out = registers[r];
+        out.lo[offset + l] = v.value.lo;
+        out.hi[offset + l] = v.value.hi;
+        const bool not_finite = !std::isfinite(v.value.lo) || !std::isfinite(v.value.hi);
+        out.flags[offset + l] = (v.maybe_discontinuous ? kMaybeDiscontinuous : 0) |
+                                (v.maybe_undefined ? kMaybeUndefined : 0) |
+                                (not_finite || more_not_finite ? kNotFinite : 0);
     }
 
     /// An operand of a binary step: its register, or the immediate as the interval [c, c]
@@ -289,7 +309,38 @@ struct Lanes {
         if constexpr (in_register) return flags(r);
         return M{};
     }
+    template <bool in_register>
+    ISOMESH_MEMBER IntervalValue operand_value(std::uint32_t r, double imm, std::size_t l) const {
+        if constexpr (in_register) {
+            const std::int64_t f = registers[r].flags[offset + l];
+            return {{registers[r].lo[offset + l], registers[r].hi[offset + l]},
+                    (f & kMaybeDiscontinuous) != 0,
+                    (f & kMaybeUndefined) != 0};
+        }
+        return interval_constant(imm);
+    }
 };
+
+/// Lanes whose operands hold a value that is not finite (nonzero there).
+template <class M>
+ISOMESH_KERNEL M not_finite_operands(const M& fa, const M& fb) {
+    M bit{};
+    bit += kNotFinite;
+    return (fa | fb) & bit;
+}
+
+/// Whether the fast formula of unary `op` (unary_value) covers finite operands in every case; the
+/// others run the reference code lane by lane anyway.
+template <Op op>
+constexpr bool fast_unary(double imm) {
+    return op == Op::Neg || op == Op::Square || op == Op::Abs || op == Op::Sqrt ||
+           (op == Op::PowInt && imm > 0.0);
+}
+
+template <Op op>
+constexpr bool fast_binary() {
+    return op != Op::Pow && op != Op::Atan2;
+}
 
 /// A Const step's value: interval_constant(c) in every lane.
 template <std::size_t W>
@@ -299,7 +350,24 @@ ISOMESH_KERNEL auto constant_value(double c) {
     return r.template value<typename LaneTypes<W>::D, typename LaneTypes<W>::M>();
 }
 
-/// One step of the interval evaluator over V lanes of the register file (see Chunked).
+/// Lanes where the fast formula of unary `op` differs from the reference on finite operands
+/// (a square root of an entirely negative interval is empty).
+template <Op op, class D>
+ISOMESH_KERNEL auto special_unary_operand(const Ends<D>& a) {
+    if constexpr (op == Op::Sqrt)
+        return a.hi < D{};
+    else
+        return a.hi != a.hi;  // never, for a finite operand
+}
+
+/// Lanes where a division's divisor holds 0 (the reference returns the entire line).
+template <class D>
+ISOMESH_KERNEL auto holds_zero(const Ends<D>& b) {
+    return (b.lo <= D{}) & (b.hi >= D{});
+}
+
+/// One step of the interval evaluator over V lanes of the register file: the fast formulas for
+/// every lane, then the reference code for the lanes where they may differ from it.
 template <std::size_t V, class Register>
 struct IntervalStep {
     using D = typename LaneTypes<V>::D;
@@ -316,7 +384,19 @@ struct IntervalStep {
 
     template <Op op>
     ISOMESH_MEMBER void unary() {
-        lanes.store_value(s.out, unary_value<V, op>(lanes.ends(s.a), lanes.flags(s.a), s.imm));
+        const Ends<D> a = lanes.ends(s.a);
+        const M fa = lanes.flags(s.a);
+        lanes.store_value(s.out, unary_value<V, op>(a, fa, s.imm));
+        if (!fast_unary<op>(s.imm)) return;
+        const M special = not_finite_operands(fa, M{}) | as_mask<M>(special_unary_operand<op>(a));
+        if (!any(special)) return;
+        for (std::size_t l = 0; l < V; ++l) {
+            if (!lane(special, l)) continue;
+            ++lanes.by_reference;
+            lanes.set_lane(
+                s.out, l,
+                interval_ranges::unary(op, lanes.template operand_value<true>(s.a, 0, l), s.imm));
+        }
     }
 
     template <Op op, BatchForm form>
@@ -327,15 +407,29 @@ struct IntervalStep {
         const Ends<D> b = lanes.template operand<b_in_register>(s.b, s.imm);
         const M fa = lanes.template operand_flags<a_in_register>(s.a);
         const M fb = lanes.template operand_flags<b_in_register>(s.b);
-        lanes.store_value(s.out, binary_value<V, op>(a, fa, b, fb, lanes.bad));
+        lanes.store_value(s.out, binary_value<V, op>(a, fa, b, fb));
         if constexpr (op == Op::Min || op == Op::Max)
             record_choice<V, op>(a, fa, b, fb, choice, choice_stride);
+        if constexpr (!fast_binary<op>()) return;
+        M special = not_finite_operands(fa, fb);
+        if constexpr (op == Op::Div) special |= as_mask<M>(holds_zero(b));
+        if (!any(special)) return;
+        for (std::size_t l = 0; l < V; ++l) {
+            if (!lane(special, l)) continue;
+            ++lanes.by_reference;
+            const IntervalValue x = lanes.template operand_value<a_in_register>(s.a, s.imm, l);
+            const IntervalValue y = lanes.template operand_value<b_in_register>(s.b, s.imm, l);
+            lanes.set_lane(s.out, l, interval_ranges::binary(op, x, y));
+            if constexpr (op == Op::Min || op == Op::Max)
+                choice[l * choice_stride] = prove_choice(op, x, y);
+        }
     }
 };
 
 /// One step of the interval forward-mode evaluator over V lanes of the register file: the value
-/// as IntervalStep computes it, then each gradient component from the partial derivatives of
-/// forward_mode.h.
+/// as IntervalStep computes it, each gradient component from the partial derivatives of
+/// forward_mode.h, then forward_mode::step itself for the lanes where the fast formulas may
+/// differ from it.
 template <std::size_t V, class Register>
 struct GradientStep {
     using D = typename LaneTypes<V>::D;
@@ -353,23 +447,72 @@ struct GradientStep {
         return {D{}, D{}};
     }
 
-    ISOMESH_MEMBER void store_gradient(int k, const Ends<D>& g) {
-        store(lanes.registers[s.out].grad_lo[k] + lanes.offset, g.lo);
-        store(lanes.registers[s.out].grad_hi[k] + lanes.offset, g.hi);
-        lanes.bad |= as_mask<M>(nonfinite(g));
+    /// Stores the value and the gradient, and returns the lanes where a gradient is NaN (a sum of
+    /// infinities of both signs, which the reference's addition turns into infinities).
+    ISOMESH_MEMBER M store(const Value<D, M>& v, const Ends<D> (&g)[3]) {
+        Register& out = lanes.registers[s.out];
+        M not_finite{}, nan{};
+        for (int k = 0; k < 3; ++k) {
+            lanes::store(out.grad_lo[k] + lanes.offset, g[k].lo);
+            lanes::store(out.grad_hi[k] + lanes.offset, g[k].hi);
+            not_finite |= as_mask<M>(nonfinite(g[k]));
+            nan |= as_mask<M>((g[k].lo != g[k].lo) | (g[k].hi != g[k].hi));
+        }
+        lanes.store_value(s.out, v, not_finite);
+        return nan;
     }
 
-    ISOMESH_MEMBER void check(const Ends<D>& partial) {
-        lanes.bad |= as_mask<M>(nonfinite(partial));
+    template <bool in_register>
+    ISOMESH_MEMBER forward_mode::Tangent<IntervalValue> operand_tangent(std::uint32_t r,
+                                                                        std::size_t l) const {
+        forward_mode::Tangent<IntervalValue> t;
+        t.value = lanes.template operand_value<in_register>(r, s.imm, l);
+        for (int k = 0; k < 3; ++k) {
+            if constexpr (in_register) {
+                const std::size_t i = lanes.offset + l;
+                t.grad[k] = {{lanes.registers[r].grad_lo[k][i], lanes.registers[r].grad_hi[k][i]},
+                             false,
+                             false};  // gradient flags never reach an enclosure
+            } else {
+                t.grad[k] = interval_constant(0.0);
+            }
+        }
+        return t;
+    }
+
+    /// Recomputes the special lanes with forward_mode::step.
+    template <Op op, bool a_in_register, bool b_in_register>
+    ISOMESH_MEMBER void recompute(const M& special) {
+        if (!any(special)) return;
+        for (std::size_t l = 0; l < V; ++l) {
+            if (!lane(special, l)) continue;
+            ++lanes.by_reference;
+            const auto a = operand_tangent<a_in_register>(s.a, l);
+            const auto b = operand_tangent<b_in_register>(s.b, l);
+            const forward_mode::Tangent<IntervalValue> t = forward_mode::step(op, s.imm, a, b);
+            Register& out = lanes.registers[s.out];
+            const std::size_t i = lanes.offset + l;
+            bool gradient_not_finite = false;
+            for (int k = 0; k < 3; ++k) {
+                out.grad_lo[k][i] = t.grad[k].value.lo;
+                out.grad_hi[k][i] = t.grad[k].value.hi;
+                gradient_not_finite |=
+                    !std::isfinite(t.grad[k].value.lo) || !std::isfinite(t.grad[k].value.hi);
+            }
+            lanes.set_lane(s.out, l, t.value, gradient_not_finite);
+            if constexpr (op == Op::Min || op == Op::Max)
+                choice[l * choice_stride] = prove_choice(op, a.value, b.value);
+        }
     }
 
     ISOMESH_MEMBER void constant() {
-        lanes.store_value(s.out, constant_value<V>(s.imm));
-        for (int k = 0; k < 3; ++k) store_gradient(k, {D{}, D{}});
+        const Ends<D> zero[3] = {{D{}, D{}}, {D{}, D{}}, {D{}, D{}}};
+        store(constant_value<V>(s.imm), zero);
     }
     ISOMESH_MEMBER void variable() {
-        lanes.store_value(s.out, {lanes.ends(s.a), lanes.flags(s.a)});
-        for (int k = 0; k < 3; ++k) store_gradient(k, gradient<true>(s.a, k));
+        const Ends<D> g[3] = {gradient<true>(s.a, 0), gradient<true>(s.a, 1),
+                              gradient<true>(s.a, 2)};
+        store({lanes.ends(s.a), lanes.flags(s.a)}, g);
     }
 
     template <Op op>
@@ -377,13 +520,16 @@ struct GradientStep {
         const Ends<D> a = lanes.ends(s.a);
         const M fa = lanes.flags(s.a);
         const Value<D, M> r = unary_value<V, op>(a, fa, s.imm);
-        lanes.store_value(s.out, r);
         const Ends<D> partial = unary_partial<op>(a, fa, r);
-        check(partial);
+        Ends<D> g[3];
         for (int k = 0; k < 3; ++k) {
             const Ends<D> d = gradient<true>(s.a, k);
-            store_gradient(k, op == Op::Neg ? term_minus_one(d) : term(partial, d));
+            g[k] = op == Op::Neg ? term_minus_one(d) : term(partial, d);
         }
+        M special = store(r, g) | not_finite_operands(fa, M{}) |
+                    as_mask<M>(nonfinite(partial) | special_unary_operand<op>(a));
+        if constexpr (op == Op::Ln) special |= as_mask<M>(a.lo <= D{});  // 1 / a's hull
+        recompute<op, true, true>(special);
     }
 
     /// d op(a) / da (forward_mode::unary_partial), by formulas for the common operations.
@@ -396,8 +542,7 @@ struct GradientStep {
         } else if constexpr (op == Op::Square) {
             return mul({L::splat(2.0), L::splat(2.0)}, a);
         } else if constexpr (op == Op::Sqrt) {
-            // r holding 0 gives an infinite partial: the lane goes to the reference.
-            return div({L::splat(0.5), L::splat(0.5)}, r.ends);
+            return div({L::splat(0.5), L::splat(0.5)}, r.ends);  // r holding 0: infinite
         } else if (op == Op::PowInt && s.imm > 0.0) {
             // imm * a^(imm - 1), a^0 being [1, 1] as the reference's unary() makes it.
             const auto n = static_cast<unsigned>(s.imm);
@@ -407,7 +552,7 @@ struct GradientStep {
         } else if constexpr (op == Op::Exp) {
             return r.ends;
         } else if constexpr (op == Op::Ln) {
-            return div({L::splat(1.0), L::splat(1.0)}, a);  // a holding 0: an infinite value
+            return div({L::splat(1.0), L::splat(1.0)}, a);
         } else {
             LaneResults<V> p;
             for (std::size_t l = 0; l < V; ++l) {
@@ -427,8 +572,9 @@ struct GradientStep {
         const Ends<D> b = lanes.template operand<b_in_register>(s.b, s.imm);
         const M fa = lanes.template operand_flags<a_in_register>(s.a);
         const M fb = lanes.template operand_flags<b_in_register>(s.b);
-        const Value<D, M> r = binary_value<V, op>(a, fa, b, fb, lanes.bad);
-        lanes.store_value(s.out, r);
+        const Value<D, M> r = binary_value<V, op>(a, fa, b, fb);
+        Ends<D> g[3];
+        M special = not_finite_operands(fa, fb);
         if constexpr (op == Op::Min || op == Op::Max) {
             record_choice<V, op>(a, fa, b, fb, choice, choice_stride);
             const auto pick_a = a_wins<op>(a, b);
@@ -438,63 +584,67 @@ struct GradientStep {
                 const Ends<D> gb = gradient<b_in_register>(s.b, k);
                 // forward_mode::either: the hull of two finite (so non-empty) intervals.
                 const Ends<D> either{fold_min(ga.lo, gb.lo), fold_max(ga.hi, gb.hi)};
-                store_gradient(k, {pick_a   ? ga.lo
-                                   : pick_b ? gb.lo
-                                            : either.lo,
-                                   pick_a   ? ga.hi
-                                   : pick_b ? gb.hi
-                                            : either.hi});
+                g[k] = {pick_a   ? ga.lo
+                        : pick_b ? gb.lo
+                                 : either.lo,
+                        pick_a   ? ga.hi
+                        : pick_b ? gb.hi
+                                 : either.hi};
             }
-            return;
-        }
-        if constexpr (op == Op::Add || op == Op::Sub) {
+        } else if constexpr (op == Op::Add || op == Op::Sub) {
             for (int k = 0; k < 3; ++k) {
                 const Ends<D> gb = gradient<b_in_register>(s.b, k);
-                store_gradient(k, add(term_one(gradient<a_in_register>(s.a, k)),
-                                      op == Op::Add ? term_one(gb) : term_minus_one(gb)));
+                g[k] = add(term_one(gradient<a_in_register>(s.a, k)),
+                           op == Op::Add ? term_one(gb) : term_minus_one(gb));
             }
-            return;
-        }
-        Ends<D> da{}, db{};  // the partial derivatives
-        if constexpr (op == Op::Mul) {
-            da = b;
-            db = a;
-        } else if constexpr (op == Op::Div) {
-            da = div({L::splat(1.0), L::splat(1.0)}, b);
-            const Ends<D> q = div(r.ends, b);
-            db = {-q.hi, -q.lo};
         } else {
-            LaneResults<V> pa, pb;
-            for (std::size_t l = 0; l < V; ++l) {
-                const auto p = forward_mode::binary_partials(
-                    op, lane_value(a, fa, l), lane_value(b, fb, l), lane_value(r.ends, r.flags, l));
-                pa.set(l, p.da);
-                pb.set(l, p.db);
+            Ends<D> da{}, db{};  // the partial derivatives
+            if constexpr (op == Op::Mul) {
+                da = b;
+                db = a;
+            } else if constexpr (op == Op::Div) {
+                da = div({L::splat(1.0), L::splat(1.0)}, b);
+                const Ends<D> q = div(r.ends, b);
+                db = {-q.hi, -q.lo};
+                special |= as_mask<M>(holds_zero(b));
+            } else {
+                LaneResults<V> pa, pb;
+                for (std::size_t l = 0; l < V; ++l) {
+                    const auto p = forward_mode::binary_partials(op, lane_value(a, fa, l),
+                                                                 lane_value(b, fb, l),
+                                                                 lane_value(r.ends, r.flags, l));
+                    pa.set(l, p.da);
+                    pb.set(l, p.db);
+                }
+                da = pa.template ends<D>();
+                db = pb.template ends<D>();
             }
-            da = pa.template ends<D>();
-            db = pb.template ends<D>();
+            special |= as_mask<M>(nonfinite(da) | nonfinite(db));
+            for (int k = 0; k < 3; ++k) {
+                g[k] = add(term(da, gradient<a_in_register>(s.a, k)),
+                           term(db, gradient<b_in_register>(s.b, k)));
+            }
         }
-        check(da);
-        check(db);
-        for (int k = 0; k < 3; ++k) {
-            store_gradient(k, add(term(da, gradient<a_in_register>(s.a, k)),
-                                  term(db, gradient<b_in_register>(s.b, k))));
-        }
+        special |= store(r, g);
+        recompute<op, a_in_register, b_in_register>(special);
     }
 };
 
 template <std::size_t W, template <std::size_t, class> class Step, class Register>
-ISOMESH_KERNEL std::uint32_t run(std::span<const BatchStep> steps, Register* registers,
-                                 Choice* choices, std::size_t choice_count) {
+ISOMESH_KERNEL std::size_t run(std::span<const BatchStep> steps, Register* registers,
+                               Choice* choices, std::size_t choice_count) {
+    using M = typename LaneTypes<W == 1 ? 1 : kChunk>::M;
     constexpr std::size_t V = W == 1 ? 1 : kChunk;
     constexpr std::size_t kChunks = W / V;
     Lanes<V, Register> chunks[kChunks];
     for (std::size_t c = 0; c < kChunks; ++c) {
-        chunks[c].registers = registers;
-        chunks[c].offset = c * V;
-        chunks[c].bad = typename LaneTypes<V>::M{};
-        for (std::uint32_t r = 0; r < 3; ++r)  // the box must be finite too
-            chunks[c].bad |= as_mask<typename LaneTypes<V>::M>(nonfinite(chunks[c].ends(r)));
+        chunks[c] = {registers, c * V, 0};
+        for (std::uint32_t r = 0; r < 3; ++r) {  // the box's x, y and z
+            M flags = chunks[c].flags(r);
+            flags |=
+                as_mask<M>(nonfinite(chunks[c].ends(r))) & LaneTypes<V>::splat_mask(kNotFinite);
+            store(registers[r].flags + c * V, flags);
+        }
     }
     Choice* choice = choices;
     for (const BatchStep& s : steps) {
@@ -511,34 +661,32 @@ ISOMESH_KERNEL std::uint32_t run(std::span<const BatchStep> steps, Register* reg
         dispatch_step(s, visitor);
         if (s.op == Op::Min || s.op == Op::Max) ++choice;
     }
-    std::uint32_t mask = 0;
-    for (std::size_t c = 0; c < kChunks; ++c)
-        for (std::size_t l = 0; l < V; ++l)
-            mask |= static_cast<std::uint32_t>(lane(chunks[c].bad, l) != 0) << (c * V + l);
-    return mask;
+    std::size_t by_reference = 0;
+    for (const auto& chunk : chunks) by_reference += chunk.by_reference;
+    return by_reference;
 }
 
 }  // namespace
 
-std::uint32_t run_interval_steps(std::span<const BatchStep> steps, IntervalRegister<1>* registers,
-                                 Choice* choices, std::size_t choice_count) {
+std::size_t run_interval_steps(std::span<const BatchStep> steps, IntervalRegister<1>* registers,
+                               Choice* choices, std::size_t choice_count) {
     return run<1, IntervalStep>(steps, registers, choices, choice_count);
 }
 
-ISOMESH_VECTOR_CLONES std::uint32_t run_interval_steps(std::span<const BatchStep> steps,
-                                                       IntervalRegister<kIntervalLanes>* registers,
-                                                       Choice* choices, std::size_t choice_count) {
+ISOMESH_VECTOR_CLONES std::size_t run_interval_steps(std::span<const BatchStep> steps,
+                                                     IntervalRegister<kIntervalLanes>* registers,
+                                                     Choice* choices, std::size_t choice_count) {
     return run<kIntervalLanes, IntervalStep>(steps, registers, choices, choice_count);
 }
 
-std::uint32_t run_gradient_steps(std::span<const BatchStep> steps, GradientRegister<1>* registers,
-                                 Choice* choices, std::size_t choice_count) {
+std::size_t run_gradient_steps(std::span<const BatchStep> steps, GradientRegister<1>* registers,
+                               Choice* choices, std::size_t choice_count) {
     return run<1, GradientStep>(steps, registers, choices, choice_count);
 }
 
-ISOMESH_VECTOR_CLONES std::uint32_t run_gradient_steps(std::span<const BatchStep> steps,
-                                                       GradientRegister<kIntervalLanes>* registers,
-                                                       Choice* choices, std::size_t choice_count) {
+ISOMESH_VECTOR_CLONES std::size_t run_gradient_steps(std::span<const BatchStep> steps,
+                                                     GradientRegister<kIntervalLanes>* registers,
+                                                     Choice* choices, std::size_t choice_count) {
     return run<kIntervalLanes, GradientStep>(steps, registers, choices, choice_count);
 }
 

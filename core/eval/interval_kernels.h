@@ -8,12 +8,13 @@
 // Exactness. The kernels compute what the reference arithmetic (interval_math.h, forward_mode.h
 // on IntervalValue) computes, bit for bit, flags and choices included. Operations other than the
 // common arithmetic run the reference code itself per lane (interval_ranges.h, inlined for the
-// operation). The common ones (+ - * / neg square abs sqrt min max, and the derivative rules) use
-// branch-free formulas that equal the reference's whenever their operands are finite: the
-// reference's special cases (empty operands, infinities, 0 * inf, division by an interval holding
-// 0) all involve a non-finite operand or produce a non-finite result. So each lane also reports
-// whether any value or partial derivative it computed was not finite; the caller recomputes those
-// lanes with the reference evaluator. All other lanes are exact.
+// operation). The common ones (+ - * / neg square abs sqrt powers min max, and the derivative
+// rules) use branch-free formulas that equal the reference's whenever their operands are finite:
+// the reference's special cases (empty operands, infinities, 0 * inf) all involve a non-finite
+// operand. Each register lane carries a bit saying whether it holds a non-finite enclosure; a step
+// recomputes the lanes whose operands (or partial derivatives) are not finite, and the few finite
+// cases the formulas leave out (a divisor holding 0, the square root of a negative interval), with
+// the reference code for that one operation.
 #pragma once
 
 #include <cstddef>
@@ -51,22 +52,22 @@ struct alignas(8 * W) GradientRegister {
     double grad_hi[3][W];
 };
 
-/// Runs `steps` over W boxes: registers[0..2] hold x, y and z (and their gradients, the unit
-/// vectors), the result lands in registers[kOutputRegister]. The choice proven at the i-th min or
-/// max step for lane l goes to choices[l * choice_count + i]. Returns the lanes (bit l for lane l)
-/// whose results must be recomputed by the reference evaluator (see the file comment); all other
-/// lanes' results and choices equal the reference's bit for bit.
+/// Runs `steps` over W boxes: registers[0..2] hold x, y and z with no flags (and the unit vectors
+/// as their gradients), the result lands in registers[kOutputRegister] (its flags may hold bits
+/// besides IntervalValue's: test each). The choice proven at the i-th min or max step for lane l
+/// goes to choices[l * choice_count + i]. Results and choices equal the reference's bit for bit.
+/// Returns how many lane-steps ran the reference code (see the file comment).
 /// Preconditions: every immediate of `steps` is finite (TapeProgram::finite_immediates); no step
 /// writes a register it reads; choice_count is the number of min and max steps.
-std::uint32_t run_interval_steps(std::span<const BatchStep> steps, IntervalRegister<1>* registers,
-                                 Choice* choices, std::size_t choice_count);
-std::uint32_t run_interval_steps(std::span<const BatchStep> steps,
-                                 IntervalRegister<kIntervalLanes>* registers, Choice* choices,
-                                 std::size_t choice_count);
-std::uint32_t run_gradient_steps(std::span<const BatchStep> steps, GradientRegister<1>* registers,
-                                 Choice* choices, std::size_t choice_count);
-std::uint32_t run_gradient_steps(std::span<const BatchStep> steps,
-                                 GradientRegister<kIntervalLanes>* registers, Choice* choices,
-                                 std::size_t choice_count);
+std::size_t run_interval_steps(std::span<const BatchStep> steps, IntervalRegister<1>* registers,
+                               Choice* choices, std::size_t choice_count);
+std::size_t run_interval_steps(std::span<const BatchStep> steps,
+                               IntervalRegister<kIntervalLanes>* registers, Choice* choices,
+                               std::size_t choice_count);
+std::size_t run_gradient_steps(std::span<const BatchStep> steps, GradientRegister<1>* registers,
+                               Choice* choices, std::size_t choice_count);
+std::size_t run_gradient_steps(std::span<const BatchStep> steps,
+                               GradientRegister<kIntervalLanes>* registers, Choice* choices,
+                               std::size_t choice_count);
 
 }  // namespace isomesh

@@ -74,6 +74,20 @@ ISOMESH_KERNEL M as_mask(const Mask& m) {
         return m;
 }
 
+/// Whether any lane of a mask is set.
+template <class M>
+ISOMESH_KERNEL bool any(const M& m) {
+    if constexpr (std::is_arithmetic_v<M>) {
+        return m != 0;
+    } else {
+        std::int64_t lanes[sizeof m / sizeof(std::int64_t)];
+        std::memcpy(lanes, &m, sizeof m);
+        std::int64_t all = 0;
+        for (std::int64_t x : lanes) all |= x;
+        return all != 0;
+    }
+}
+
 /// Lanes whose value is infinite or NaN.
 template <class D>
 ISOMESH_KERNEL auto nonfinite(const D& x) {

@@ -16,7 +16,7 @@
 namespace isomesh {
 
 /// Points per batch of the point-gradient kernels.
-inline constexpr std::size_t kPointLanes = 32;
+inline constexpr std::size_t kPointLanes = 8;
 
 /// A register of the point forward-mode evaluator: a value and its gradient at W points.
 template <std::size_t W>

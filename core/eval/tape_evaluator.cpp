@@ -1,7 +1,6 @@
 #include "eval/tape_evaluator.h"
 
 #include <algorithm>
-#include <bit>
 #include <cassert>
 #include <cmath>
 
@@ -62,12 +61,12 @@ IntervalGradient lane_result(const GradientRegister<W>& r, std::size_t l) {
 }
 
 template <std::size_t W>
-std::uint32_t run_kernel(const TapeProgram& p, IntervalRegister<W>* r, Choice* choices) {
+std::size_t run_kernel(const TapeProgram& p, IntervalRegister<W>* r, Choice* choices) {
     return run_interval_steps(p.steps, r, choices, p.choice_slots.size());
 }
 
 template <std::size_t W>
-std::uint32_t run_kernel(const TapeProgram& p, GradientRegister<W>* r, Choice* choices) {
+std::size_t run_kernel(const TapeProgram& p, GradientRegister<W>* r, Choice* choices) {
     return run_gradient_steps(p.steps, r, choices, p.choice_slots.size());
 }
 
@@ -207,21 +206,19 @@ void TapeEvaluator::evaluate_boxes(std::span<const Box> boxes, std::span<Result>
     const std::size_t choice_count = program.choice_slots.size();
     choices_boxes_.assign(boxes.begin(), boxes.end());
     choices_.resize(W * choice_count);
-    std::uint32_t to_reference = (1u << boxes.size()) - 1;
-    if (!reference_ && program.finite_immediates) {
-        registers.resize(std::max(registers.size(), register_count(program)));
-        load_boxes<W>(registers.data(), boxes);
-        to_reference &= run_kernel(program, registers.data(), choices_.data());
-        counts_.boxes += boxes.size();
-        counts_.by_reference += static_cast<std::size_t>(std::popcount(to_reference));
-    }
-    for (std::size_t l = 0; l < boxes.size(); ++l) {
-        std::span<Choice> lane_choices(choices_.data() + l * choice_count, choice_count);
-        if (to_reference >> l & 1)
+    if (reference_ || !program.finite_immediates) {
+        for (std::size_t l = 0; l < boxes.size(); ++l) {
+            std::span<Choice> lane_choices(choices_.data() + l * choice_count, choice_count);
             run_reference(reference_evaluation_, program, boxes[l], lane_choices, out[l]);
-        else
-            out[l] = lane_result(registers[kOutputRegister], l);
+        }
+        return;
     }
+    registers.resize(std::max(registers.size(), register_count(program)));
+    load_boxes<W>(registers.data(), boxes);
+    counts_.by_reference += run_kernel(program, registers.data(), choices_.data());
+    counts_.steps += W * program.steps.size();
+    for (std::size_t l = 0; l < boxes.size(); ++l)
+        out[l] = lane_result(registers[kOutputRegister], l);
 }
 
 std::span<const Choice> TapeEvaluator::choices_on(const Box& box) {

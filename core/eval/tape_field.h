@@ -37,11 +37,12 @@ std::shared_ptr<const Field> make_tape_field(std::shared_ptr<const Tape> tape,
 /// benchmarks.
 std::size_t active_tape_size(const Evaluator& evaluator);
 
-/// How many boxes `evaluator`'s interval kernels have evaluated, and how many of them they left to
-/// the reference evaluation (where a value stopped being finite: poles, infinite boxes). Zeros
-/// when `evaluator` does not come from make_tape_field. For tests and benchmarks.
+/// How many box-steps (one instruction on one box) `evaluator`'s interval kernels have run, and
+/// how many of them the reference code recomputed (where an enclosure is not finite: poles,
+/// infinite boxes, divisors holding 0; see interval_kernels.h). Zeros when `evaluator` does not
+/// come from make_tape_field. For tests and benchmarks.
 struct IntervalKernelCounts {
-    std::size_t boxes = 0;
+    std::size_t steps = 0;
     std::size_t by_reference = 0;
 };
 IntervalKernelCounts interval_kernel_counts(const Evaluator& evaluator);
