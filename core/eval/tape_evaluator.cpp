@@ -235,12 +235,27 @@ std::span<const Choice> TapeEvaluator::choices_on(const Box& box) {
 void TapeEvaluator::push(const Box& box) {
     if (!simplify_) return;
     std::shared_ptr<const TapeProgram> current = stack_.back();
-    if (!current->choice_slots.empty()) {
-        auto simplified = simplify_on_box(current->code, current->choice_slots, choices_on(box));
-        if (simplified)
-            current = std::make_shared<const TapeProgram>(make_program(std::move(*simplified)));
-    }
+    if (!current->choice_slots.empty()) current = simplified(choices_on(box));
     stack_.push_back(std::move(current));
+}
+
+std::shared_ptr<const TapeProgram> TapeEvaluator::simplified(std::span<const Choice> choices) {
+    const std::shared_ptr<const TapeProgram>& parent = stack_.back();
+    for (const Simplification& s : simplifications_) {
+        if (s.parent == parent &&
+            std::equal(choices.begin(), choices.end(), s.choices.begin(), s.choices.end()))
+            return s.program;
+    }
+    auto code = simplify_on_box(parent->code, parent->choice_slots, choices);
+    if (!code) return parent;
+    auto program = std::make_shared<const TapeProgram>(make_program(std::move(*code)));
+    Simplification entry{parent, {choices.begin(), choices.end()}, program};
+    if (simplifications_.size() < kSimplifications)
+        simplifications_.push_back(std::move(entry));
+    else
+        simplifications_[next_simplification_] = std::move(entry);
+    next_simplification_ = (next_simplification_ + 1) % kSimplifications;
+    return program;
 }
 
 void TapeEvaluator::pop() {

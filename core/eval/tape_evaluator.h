@@ -53,6 +53,8 @@ class TapeEvaluator final : public Evaluator {
     /// The choices interval evaluation proves on `box` with the top program: those of the last
     /// batch when it held the box, else from a new evaluation.
     std::span<const Choice> choices_on(const Box& box);
+    /// The top program specialised to `choices` (itself when they prove nothing).
+    std::shared_ptr<const TapeProgram> simplified(std::span<const Choice> choices);
     /// Runs the point-gradient kernel over up to W points (lanes past the last repeat point 0).
     template <std::size_t W>
     void value_gradients(const PointBatch& points, std::span<ValueGradient> out,
@@ -84,6 +86,16 @@ class TapeEvaluator final : public Evaluator {
     std::vector<Box> choices_boxes_;
     std::vector<Choice> choices_;
     IntervalKernelCounts counts_;
+    // Programs push() made lately, by the program and the choices they simplify (neighbouring
+    // cells mostly prove the same choices): reused rather than rebuilt. Replaced round-robin.
+    struct Simplification {
+        std::shared_ptr<const TapeProgram> parent;
+        std::vector<Choice> choices;
+        std::shared_ptr<const TapeProgram> program;
+    };
+    static constexpr std::size_t kSimplifications = 16;
+    std::vector<Simplification> simplifications_;
+    std::size_t next_simplification_ = 0;
 };
 
 }  // namespace isomesh
