@@ -84,7 +84,7 @@ ISOMESH_KERNEL Ends<D> magnitude(const Ends<D>& a) {
 
 template <class D>
 ISOMESH_KERNEL auto is_zero(const Ends<D>& d) {
-    return (d.lo == D{}) & (d.hi == D{});
+    return mask_of(d.lo == D{}) & mask_of(d.hi == D{});
 }
 
 /// forward_mode::term(partial, d) for finite operands: exactly 0 for a zero tangent, else the
@@ -363,7 +363,7 @@ ISOMESH_KERNEL auto special_unary_operand(const Ends<D>& a) {
 /// Lanes where a division's divisor holds 0 (the reference returns the entire line).
 template <class D>
 ISOMESH_KERNEL auto holds_zero(const Ends<D>& b) {
-    return (b.lo <= D{}) & (b.hi >= D{});
+    return mask_of(b.lo <= D{}) & mask_of(b.hi >= D{});
 }
 
 /// One step of the interval evaluator over V lanes of the register file: the fast formulas for
@@ -456,7 +456,7 @@ struct GradientStep {
             lanes::store(out.grad_lo[k] + lanes.offset, g[k].lo);
             lanes::store(out.grad_hi[k] + lanes.offset, g[k].hi);
             not_finite |= as_mask<M>(nonfinite(g[k]));
-            nan |= as_mask<M>((g[k].lo != g[k].lo) | (g[k].hi != g[k].hi));
+            nan |= as_mask<M>(mask_of(g[k].lo != g[k].lo) | mask_of(g[k].hi != g[k].hi));
         }
         lanes.store_value(s.out, v, not_finite);
         return nan;

@@ -88,10 +88,20 @@ ISOMESH_KERNEL bool any(const M& m) {
     }
 }
 
+/// A comparison's result as a mask that combines with | and &: a vector comparison gives one
+/// already, a scalar one's bool becomes an integer (-1 or 0).
+template <class Mask>
+ISOMESH_KERNEL auto mask_of(const Mask& m) {
+    if constexpr (std::is_same_v<Mask, bool>)
+        return m ? std::int64_t(-1) : std::int64_t(0);
+    else
+        return m;
+}
+
 /// Lanes whose value is infinite or NaN.
 template <class D>
 ISOMESH_KERNEL auto nonfinite(const D& x) {
-    return x - x != D{};
+    return mask_of(x - x != D{});
 }
 
 /// A visitor of dispatch_step that runs a step on each of kChunks chunks of lanes: make(c) gives

@@ -151,7 +151,7 @@ struct PointStep {
         } else if constexpr (op == Op::Min || op == Op::Max) {
             // apply_binary: NaN as a + b when either operand is NaN, else a < b ? a : b.
             const D chosen = op == Op::Min ? (a < b ? a : b) : (a > b ? a : b);
-            r = (a != a) | (b != b) ? a + b : chosen;
+            r = mask_of(a != a) | mask_of(b != b) ? a + b : chosen;
         } else {
             r = each_lane<V, D>(
                 [&](std::size_t l) { return apply_binary(op, lane(a, l), lane(b, l)); });
