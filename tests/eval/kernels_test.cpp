@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <sstream>
 
 #include "eval/tape_field.h"
@@ -171,6 +172,29 @@ INSTANTIATE_TEST_SUITE_P(AllFunctions, Kernels, ::testing::ValuesIn(cases()),
                          [](const ::testing::TestParamInfo<Case>& info) {
                              return info.param.name;
                          });
+
+// Tapes whose output is a leaf run the kernels' Const and variable steps only.
+TEST(KernelLeaves, constant_and_variable_tapes_match_reference) {
+    const std::vector<Box> boxes = {
+        {{-1, 2, 3}, {1, 2.5, 4}}, {{0, 0, 0}, {0, 0, 0}}, {{-5, -4, -3}, {5, 4, 3}}};
+    for (const Instruction& leaf :
+         {Instruction{Op::Const, 0, 0, 2.5}, Instruction{Op::Const, 0, 0, std::nan("")},
+          Instruction{Op::Const, 0, 0, -INFINITY}, Instruction{Op::VarY}}) {
+        auto tape = std::make_shared<const Tape>(Tape{{leaf}, {}});
+        auto fast = make_tape_field(tape, {})->make_evaluator();
+        auto reference = make_tape_field(tape, {}, {.reference = true})->make_evaluator();
+        std::vector<IntervalGradient> batch(boxes.size());
+        fast->interval_gradients(boxes, batch);
+        for (std::size_t i = 0; i < boxes.size(); ++i) {
+            const IntervalGradient expected = reference->interval_gradient(boxes[i]);
+            EXPECT_TRUE(same(batch[i], expected))
+                << op_name(leaf.op) << " " << leaf.imm << ": " << describe(batch[i]) << " vs "
+                << describe(expected);
+            EXPECT_TRUE(same(fast->interval(boxes[i]), expected.value));
+            EXPECT_TRUE(same(fast->interval_gradient(boxes[i]), expected));
+        }
+    }
+}
 
 // On an octree's boxes the kernels do the work: the reference code recomputes only the steps
 // whose operands are not finite (here: the derivative of sqrt at the origin, infinite on the 8
