@@ -154,16 +154,16 @@ struct Tangent {
     T grad[3];
 };
 
-/// The tangent of one unary or binary instruction `op` (immediate `imm`) from its operands' (b is
-/// ignored for a unary operation).
+/// out = the tangent of one unary or binary instruction `op` (immediate `imm`) from its operands'
+/// (b is ignored for a unary operation). Written in place: `out` must not be a or b.
 template <class T>
-Tangent<T> step(Op op, double imm, const Tangent<T>& a, const Tangent<T>& b) {
-    Tangent<T> out;
+[[gnu::always_inline]] inline void step(Tangent<T>& out, Op op, double imm, const Tangent<T>& a,
+                                        const Tangent<T>& b) {
     if (is_unary(op)) {
         out.value = unary(op, a.value, imm);
         T partial = unary_partial(op, a.value, out.value, imm);
         for (int k = 0; k < 3; ++k) out.grad[k] = term(partial, a.grad[k]);
-        return out;
+        return;
     }
     out.value = binary(op, a.value, b.value);
     if (op == Op::Min || op == Op::Max) {
@@ -173,12 +173,11 @@ Tangent<T> step(Op op, double imm, const Tangent<T>& a, const Tangent<T>& b) {
                           : p == Pick::B ? b.grad[k]
                                          : either(a.grad[k], b.grad[k]);
         }
-        return out;
+        return;
     }
     Partials<T> partial = binary_partials(op, a.value, b.value, out.value);
     for (int k = 0; k < 3; ++k)
         out.grad[k] = binary(Op::Add, term(partial.da, a.grad[k]), term(partial.db, b.grad[k]));
-    return out;
 }
 
 /// Runs `code` in forward mode and returns the tangent of its last instruction. `leaf(ins)` gives
@@ -200,7 +199,7 @@ Tangent<T> differentiate(std::span<const Instruction> code, std::vector<Tangent<
                 out.grad[static_cast<int>(ins.op) - 1] = one;
             continue;
         }
-        out = step(ins.op, ins.imm, slots[ins.a], slots[is_binary(ins.op) ? ins.b : ins.a]);
+        step(out, ins.op, ins.imm, slots[ins.a], slots[is_binary(ins.op) ? ins.b : ins.a]);
     }
     return slots[code.size() - 1];
 }

@@ -489,7 +489,8 @@ struct GradientStep {
             ++lanes.by_reference;
             const auto a = operand_tangent<a_in_register>(s.a, l);
             const auto b = operand_tangent<b_in_register>(s.b, l);
-            const forward_mode::Tangent<IntervalValue> t = forward_mode::step(op, s.imm, a, b);
+            forward_mode::Tangent<IntervalValue> t;
+            forward_mode::step(t, op, s.imm, a, b);
             Register& out = lanes.registers[s.out];
             const std::size_t i = lanes.offset + l;
             bool gradient_not_finite = false;
