@@ -15,9 +15,6 @@ std::size_t register_count(const TapeProgram& program) {
     return kFirstScratchRegister + program.scratch_registers;
 }
 
-/// Whether batches of boxes run the kIntervalLanes-wide kernels (else box by box).
-constexpr bool kWideBatches = true;
-
 bool same_box(const Box& a, const Box& b) {
     return a.lo == b.lo && a.hi == b.hi;
 }
@@ -185,11 +182,7 @@ template <class Result, class Narrow, class Wide>
 void TapeEvaluator::evaluate_batch(std::span<const Box> boxes, std::span<Result> out,
                                    Narrow& narrow, Wide& wide) {
     assert(boxes.size() == out.size());
-    if (boxes.size() == 1 || !kWideBatches) {
-        for (std::size_t i = 0; i < boxes.size(); ++i)
-            evaluate_boxes<1>(boxes.subspan(i, 1), out.subspan(i, 1), narrow);
-        return;
-    }
+    if (boxes.size() == 1) return evaluate_boxes<1>(boxes, out, narrow);
     for (std::size_t start = 0; start < boxes.size(); start += kIntervalLanes) {
         const std::size_t count = std::min(kIntervalLanes, boxes.size() - start);
         evaluate_boxes<kIntervalLanes>(boxes.subspan(start, count), out.subspan(start, count),
