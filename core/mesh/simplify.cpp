@@ -66,15 +66,16 @@ class Simplifier {
         : mesh_(mesh, box_faces),
           quadrics_(mesh.positions.size()),
           stamps_(mesh.positions.size(), 0),
-          blocked_(mesh.positions.size()) {
-        for (std::uint32_t t = 0; t < mesh_.triangle_slots(); ++t) add_triangle_planes(t);
-        for (std::uint32_t v = 0; v < quadrics_.size(); ++v) push_edges(v);
-    }
+          blocked_(mesh.positions.size()) {}
 
     /// Collapses until the mesh has at most `target` triangles, no candidate is left, or the
     /// budget is exhausted (checked every kCheckInterval candidates); true when not stopped by
     /// the budget. Resumable: a later call goes on with the same queue.
     bool advance(std::size_t target, const WorkBudget& budget, SimplifyReport& report) {
+        if (!prepare(budget)) {
+            report.cancelled = budget.cancelled();
+            return false;
+        }
         while (mesh_.live_triangles() > target && !queue_.empty()) {
             if (++popped_ % kCheckInterval == 0 && budget.exhausted()) {
                 report.cancelled = budget.cancelled();
@@ -109,6 +110,26 @@ class Simplifier {
     }
 
   private:
+    /// The quadrics of every vertex, then every edge's candidates, a chunk between two looks at
+    /// the budget; true once done.
+    bool prepare(const WorkBudget& budget) {
+        constexpr std::uint32_t kChunk = 16384;
+        while (prepared_triangles_ < mesh_.triangle_slots()) {
+            const std::uint32_t end = std::min<std::uint32_t>(
+                static_cast<std::uint32_t>(mesh_.triangle_slots()), prepared_triangles_ + kChunk);
+            for (; prepared_triangles_ < end; ++prepared_triangles_)
+                add_triangle_planes(prepared_triangles_);
+            if (budget.exhausted()) return false;
+        }
+        while (prepared_vertices_ < quadrics_.size()) {
+            const std::uint32_t end = std::min<std::uint32_t>(
+                static_cast<std::uint32_t>(quadrics_.size()), prepared_vertices_ + kChunk);
+            for (; prepared_vertices_ < end; ++prepared_vertices_) push_edges(prepared_vertices_);
+            if (budget.exhausted() && prepared_vertices_ < quadrics_.size()) return false;
+        }
+        return true;
+    }
+
     void add_triangle_planes(std::uint32_t t) {
         const auto& tri = mesh_.triangle(t);
         const glm::dvec3 a = mesh_.position(tri[0]), b = mesh_.position(tri[1]),
@@ -171,6 +192,8 @@ class Simplifier {
     std::vector<std::vector<Candidate>> blocked_;  // refused candidates, by the vertex to move
     std::priority_queue<Candidate, std::vector<Candidate>, std::greater<>> queue_;
     std::size_t popped_ = 0;
+    std::uint32_t prepared_triangles_ = 0;  // prepare()'s progress
+    std::uint32_t prepared_vertices_ = 0;
 };
 
 }  // namespace

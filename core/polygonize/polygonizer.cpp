@@ -224,8 +224,8 @@ struct CrossingRoots {
     std::vector<EdgeRoot> roots;
 };
 
-CrossingRoots find_roots(EvaluatorPool& workers, const Lattice& lattice, const ValueMap& values,
-                         const std::vector<LeafMeshes>& parts, const WorkBudget& budget) {
+/// The crossings the leaves' triangles use, their roots not found yet.
+CrossingRoots crossings_used(const std::vector<LeafMeshes>& parts) {
     CrossingRoots result;
     for (const LeafMeshes& part : parts) {
         for (const auto& triangle : part.triangles) {
@@ -237,16 +237,22 @@ CrossingRoots find_roots(EvaluatorPool& workers, const Lattice& lattice, const V
     std::sort(result.keys.begin(), result.keys.end());
     result.keys.erase(std::unique(result.keys.begin(), result.keys.end()), result.keys.end());
     result.roots.resize(result.keys.size());
-    workers.for_each(
-        task_count(result.keys.size(), kEdgesPerTask),
-        [&](std::size_t task, CountingEvaluator& evaluator) {
-            const std::size_t end = std::min(result.keys.size(), (task + 1) * kEdgesPerTask);
-            for (std::size_t i = task * kEdgesPerTask; i < end && !budget.cancelled(); ++i) {
-                result.roots[i] =
-                    find_edge_root(evaluator, crossing_segment(values, lattice, result.keys[i]));
-            }
-        });
     return result;
+}
+
+/// Finds the roots of crossings [begin, end) of `crossings`.
+void find_roots(EvaluatorPool& workers, const Lattice& lattice, const ValueMap& values,
+                CrossingRoots& crossings, std::size_t begin, std::size_t end,
+                const WorkBudget& budget) {
+    workers.for_each(task_count(end - begin, kEdgesPerTask),
+                     [&](std::size_t task, CountingEvaluator& evaluator) {
+                         const std::size_t first = begin + task * kEdgesPerTask;
+                         const std::size_t last = std::min(end, first + kEdgesPerTask);
+                         for (std::size_t i = first; i < last && !budget.cancelled(); ++i) {
+                             crossings.roots[i] = find_edge_root(
+                                 evaluator, crossing_segment(values, lattice, crossings.keys[i]));
+                         }
+                     });
 }
 
 /// The mesh: a vertex per crossing that is a root, then the leaves' own vertices; triangles
@@ -301,49 +307,53 @@ std::vector<std::uint8_t> box_faces(const Mesh& mesh, const Box& box) {
     return faces;
 }
 
-/// The mesh of a frontier (steps 2 to 6 of the file comment).
+}  // namespace
+
+/// The mesh of a frontier (steps 2 to 6 of the file comment), made over one or several calls of
+/// advance(): the work goes in chunks of a few thousand leaves or crossings, the budget checked
+/// between them, and what a call leaves undone the next one takes up, so that the mesh does not
+/// depend on where budgets cut it.
 class FrontierMesher {
   public:
     FrontierMesher(EvaluatorPool& workers, const Lattice& lattice, const OctreeSettings& settings,
-                   ValueMap& values, const WorkBudget& budget)
+                   ValueMap& values, std::vector<FrontierCell> frontier)
         : workers_(workers),
           lattice_(lattice),
           settings_(settings),
           values_(values),
-          budget_(budget) {}
-
-    PolygonizeResult run(std::vector<FrontierCell> frontier) {
-        frontier_ = std::move(frontier);
+          frontier_(std::move(frontier)) {
         preview_ = std::any_of(frontier_.begin(), frontier_.end(),
                                [](const FrontierCell& f) { return f.state == CellState::Pending; });
         leaves_ = cells_of(frontier_);
         finest_ = deepest(frontier_);
         fresh_ = leaves_;
         unlocated_ = leaves_;
-        std::vector<LeafMeshes> parts = mesh_leaves();
-        PolygonizeResult result;
-        PolygonizeStats& stats = result.stats;
-        stats.cells = leaves_.size();
-        stats.depth = finest_;
-        for (const FrontierCell& f : frontier_) {
-            stats.unresolved_cells += f.state != CellState::Leaf;
-            stats.pending_cells += f.state == CellState::Pending;
-        }
-        if (budget_.cancelled()) return result;
-        result.mesh = assemble(find_roots(workers_, lattice_, values_, parts, budget_), parts);
-        if (budget_.cancelled()) return result;
-        const glm::dvec3 step = lattice_.box().size() / std::ldexp(1.0, stats.depth);
-        const ThinTriangleSettings cleanup{kMinEdgeFraction * std::min({step.x, step.y, step.z}),
-                                           kMinQuality};
-        const ThinTriangleReport report =
-            remove_thin_triangles(result.mesh, box_faces(result.mesh, lattice_.box()), cleanup);
-        stats.collapses = report.collapses;
-        stats.flips = report.flips;
-        build_adjacency(result.mesh);
-        return result;
+        index_.emplace(leaves_);
+        states_.resize(leaves_.size());
     }
 
+    /// Goes on until the mesh is made (true) or the budget is exhausted or cancelled (false).
+    bool advance(const WorkBudget& budget) {
+        budget_ = &budget;
+        while (stage_ != Stage::done) {
+            if (budget.cancelled() || !run_chunk()) return false;
+            if (stage_ != Stage::done && budget.exhausted()) return false;
+        }
+        return true;
+    }
+
+    /// The mesh. Precondition: advance() returned true.
+    PolygonizeResult take() { return std::move(result_); }
+
   private:
+    /// Grades the frontier, then meshes every leaf; splits the leaves whose faces do not match
+    /// their finer neighbours, and again, until all match (leaves of equal size always do, so
+    /// this ends). Incremental: after a split, only the new leaves and the leaves across the
+    /// split cells' faces are graded and meshed again (a leaf's grading and mesh depend only on
+    /// itself and its face neighbours), so the result is that of meshing everything each time.
+    /// Then the roots of the crossings used, the mesh, its cleanup.
+    enum class Stage { corners, grade, split, locate, mesh, roots, assemble, finish, done };
+
     /// A leaf's meshing state, kept beside leaves_.
     struct LeafState {
         std::unique_ptr<LeafMeshes> mesh;  // none while it has no triangles (most leaves)
@@ -351,55 +361,160 @@ class FrontierMesher {
         bool stale = true;                 // its mesh must be made (again)
     };
 
-    /// Grades the frontier, then meshes every leaf; splits the leaves whose faces do not match
-    /// their finer neighbours, and again, until all match (leaves of equal size always do, so
-    /// this ends). Incremental: after a split, only the new leaves and the leaves across the
-    /// split cells' faces are graded and meshed again (a leaf's grading and mesh depend only on
-    /// itself and its face neighbours), so the result is that of meshing everything each time.
-    std::vector<LeafMeshes> mesh_leaves() {
-        index_.emplace(leaves_);
-        states_.clear();
-        states_.resize(leaves_.size());
-        while (!budget_.cancelled()) {
-            evaluate_corners(workers_, lattice_, fresh_, values_, budget_);
-            if (budget_.cancelled()) break;  // corners are missing: nothing below may run
-            fresh_.clear();
-            const LeafMeshingInput input{lattice_, values_, crossings_, *index_};
-            const std::vector<std::size_t> ungraded =
-                select(flagged(&LeafState::grade),
-                       [&](std::size_t i) { return needs_grading(input, leaves_[i]); });
-            for (LeafState& state : states_) state.grade = false;
-            if (!ungraded.empty()) {
-                split(ungraded);
-                continue;
-            }
-            locate_crossings(workers_, lattice_, unlocated_, finest_, values_, crossings_, budget_);
-            if (budget_.cancelled()) break;
-            unlocated_.clear();
-            const std::vector<std::size_t> unmatched = mesh_stale(input);
-            if (unmatched.empty() || budget_.cancelled()) break;
-            split(unmatched);
+    /// Leaves, crossings or cells handled between two looks at the budget.
+    static constexpr std::size_t kChunk = 4096;
+
+    /// One chunk of the current stage; false when cancelled midway (the chunk is done again).
+    bool run_chunk() {
+        switch (stage_) {
+            case Stage::corners:
+                return evaluate_fresh_corners();
+            case Stage::grade:
+                return select_chunk(&LeafState::grade, [this](std::size_t i, CountingEvaluator&) {
+                    return needs_grading(input(), leaves_[i]);
+                });
+            case Stage::split:
+                split_chunk();
+                return !budget_->cancelled();
+            case Stage::locate:
+                return locate_chunk();
+            case Stage::mesh:
+                return select_chunk(&LeafState::stale,
+                                    [this](std::size_t i, CountingEvaluator& evaluator) {
+                                        return !mesh_stale_leaf(i, evaluator);
+                                    });
+            case Stage::roots:
+                return roots_chunk();
+            case Stage::assemble:
+                result_.mesh = assemble(roots_, parts_);
+                stage_ = Stage::finish;
+                return true;
+            case Stage::finish:
+                finish();
+                return !budget_->cancelled();
+            case Stage::done:
+                return true;
         }
-        std::vector<LeafMeshes> parts;
-        for (LeafState& state : states_) {
-            if (state.mesh) parts.push_back(std::move(*state.mesh));
-        }
-        return parts;
+        return true;
     }
 
-    /// Meshes the stale leaves; returns the indices of those that did not match.
-    std::vector<std::size_t> mesh_stale(const LeafMeshingInput& input) {
-        return select(flagged(&LeafState::stale), [&](std::size_t i, CountingEvaluator& evaluator) {
-            LeafState& state = states_[i];
-            LeafMeshes mesh;
-            mesh_leaf(evaluator, input, leaves_[i], mesh);
-            state.stale = false;
-            const bool matched = mesh.unmatched.empty();
-            state.mesh = mesh.triangles.empty() && mesh.extra_positions.empty()
-                             ? nullptr
-                             : std::make_unique<LeafMeshes>(std::move(mesh));
-            return !matched;
-        });
+    LeafMeshingInput input() const { return {lattice_, values_, crossings_, *index_}; }
+
+    bool evaluate_fresh_corners() {
+        const std::size_t n = std::min(kChunk, fresh_.size());
+        const std::vector<CellId> chunk(fresh_.end() - static_cast<std::ptrdiff_t>(n),
+                                        fresh_.end());
+        evaluate_corners(workers_, lattice_, chunk, values_, *budget_);
+        if (budget_->cancelled()) return false;  // corners are missing: nothing below may run
+        fresh_.resize(fresh_.size() - n);
+        if (fresh_.empty()) begin_selection(Stage::grade, &LeafState::grade);
+        return true;
+    }
+
+    /// Starts a stage that looks at every leaf with `flag` set.
+    void begin_selection(Stage stage, bool LeafState::*flag) {
+        stage_ = stage;
+        candidates_ = flagged(flag);
+        cursor_ = 0;
+        selected_.clear();
+    }
+
+    /// Runs `predicate` on the next chunk of candidates_, gathering those it holds for; once all
+    /// are seen, moves on: to splitting them if any, else to the next stage.
+    template <typename Predicate>
+    bool select_chunk(bool LeafState::*flag, const Predicate& predicate) {
+        const std::size_t end = std::min(candidates_.size(), cursor_ + kChunk);
+        const std::vector<std::size_t> chunk(candidates_.begin() + cursor_,
+                                             candidates_.begin() + end);
+        const std::vector<std::size_t> chosen = select(chunk, predicate);
+        if (budget_->cancelled()) return false;
+        for (std::size_t i : chunk) states_[i].*flag = false;
+        selected_.insert(selected_.end(), chosen.begin(), chosen.end());
+        cursor_ = end;
+        if (cursor_ < candidates_.size()) return true;
+        if (!selected_.empty()) {
+            begin_split();
+        } else if (stage_ == Stage::grade) {
+            stage_ = Stage::locate;
+        } else {
+            begin_roots();
+        }
+        return true;
+    }
+
+    void begin_split() {
+        to_split_.clear();
+        for (std::size_t i : selected_) to_split_.push_back(leaves_[i]);
+        split_cursor_ = 0;
+        stage_ = Stage::split;
+    }
+
+    void split_chunk() {
+        const std::size_t end = std::min(to_split_.size(), split_cursor_ + kChunk);
+        split({to_split_.begin() + split_cursor_, to_split_.begin() + end});
+        split_cursor_ = end;
+        if (split_cursor_ == to_split_.size()) stage_ = Stage::corners;
+    }
+
+    bool locate_chunk() {
+        const std::size_t n = std::min(kChunk, unlocated_.size());
+        const std::vector<CellId> chunk(unlocated_.end() - static_cast<std::ptrdiff_t>(n),
+                                        unlocated_.end());
+        locate_crossings(workers_, lattice_, chunk, finest_, values_, crossings_, *budget_);
+        if (budget_->cancelled()) return false;
+        unlocated_.resize(unlocated_.size() - n);
+        if (unlocated_.empty()) begin_selection(Stage::mesh, &LeafState::stale);
+        return true;
+    }
+
+    void begin_roots() {
+        for (LeafState& state : states_) {
+            if (state.mesh) parts_.push_back(std::move(*state.mesh));
+        }
+        states_.clear();
+        roots_ = crossings_used(parts_);
+        cursor_ = 0;
+        stage_ = Stage::roots;
+    }
+
+    bool roots_chunk() {
+        const std::size_t end = std::min(roots_.keys.size(), cursor_ + kChunk);
+        find_roots(workers_, lattice_, values_, roots_, cursor_, end, *budget_);
+        if (budget_->cancelled()) return false;
+        cursor_ = end;
+        if (cursor_ == roots_.keys.size()) stage_ = Stage::assemble;
+        return true;
+    }
+
+    void finish() {
+        PolygonizeStats& stats = result_.stats;
+        stats.cells = leaves_.size();
+        stats.depth = finest_;
+        for (const FrontierCell& f : frontier_) {
+            stats.unresolved_cells += f.state != CellState::Leaf;
+            stats.pending_cells += f.state == CellState::Pending;
+        }
+        const glm::dvec3 step = lattice_.box().size() / std::ldexp(1.0, stats.depth);
+        const ThinTriangleSettings cleanup{kMinEdgeFraction * std::min({step.x, step.y, step.z}),
+                                           kMinQuality};
+        const ThinTriangleReport report =
+            remove_thin_triangles(result_.mesh, box_faces(result_.mesh, lattice_.box()), cleanup);
+        stats.collapses = report.collapses;
+        stats.flips = report.flips;
+        build_adjacency(result_.mesh);
+        stage_ = Stage::done;
+    }
+
+    /// Meshes stale leaf i; false when it did not match.
+    bool mesh_stale_leaf(std::size_t i, CountingEvaluator& evaluator) {
+        LeafState& state = states_[i];
+        LeafMeshes mesh;
+        mesh_leaf(evaluator, input(), leaves_[i], mesh);
+        const bool matched = mesh.unmatched.empty();
+        state.mesh = mesh.triangles.empty() && mesh.extra_positions.empty()
+                         ? nullptr
+                         : std::make_unique<LeafMeshes>(std::move(mesh));
+        return matched;
     }
 
     /// The indices of the leaves with `flag` set, in order.
@@ -421,7 +536,7 @@ class FrontierMesher {
             task_count(candidates.size(), kCellsPerTask),
             [&](std::size_t task, CountingEvaluator& evaluator) {
                 const std::size_t end = std::min(candidates.size(), (task + 1) * kCellsPerTask);
-                for (std::size_t k = task * kCellsPerTask; k < end && !budget_.cancelled(); ++k) {
+                for (std::size_t k = task * kCellsPerTask; k < end && !budget_->cancelled(); ++k) {
                     if constexpr (std::is_invocable_v<Predicate, std::size_t>) {
                         chosen[k] = predicate(candidates[k]);
                     } else {
@@ -436,15 +551,12 @@ class FrontierMesher {
         return result;
     }
 
-    /// Splits the leaves at `which` (indices, in order), keeping the index, the leaves' states
-    /// and the crossings up to date.
-    void split(const std::vector<std::size_t>& which) {
-        std::vector<CellId> cells;
-        cells.reserve(which.size());
-        for (std::size_t i : which) cells.push_back(leaves_[i]);
+    /// Splits the leaves `cells` (in order), keeping the index, the leaves' states and the
+    /// crossings up to date.
+    void split(const std::vector<CellId>& cells) {
         const std::size_t before = fresh_.size();
         frontier_ = split_cells(workers_, lattice_, settings_, frontier_, cells, preview_, values_,
-                                fresh_, budget_);
+                                fresh_, *budget_);
         std::vector<CellId> old_leaves = std::exchange(leaves_, cells_of(frontier_));
         carry_states(old_leaves);
         for (const CellId& cell : cells) {
@@ -502,7 +614,7 @@ class FrontierMesher {
     const Lattice& lattice_;
     const OctreeSettings& settings_;
     ValueMap& values_;
-    const WorkBudget& budget_;
+    const WorkBudget* budget_ = nullptr;  // of the advance() under way
     std::vector<FrontierCell> frontier_;
     bool preview_ = false;  // some cell is pending: the octree is unfinished
     std::vector<CellId> leaves_;
@@ -512,9 +624,16 @@ class FrontierMesher {
     std::unordered_map<std::uint64_t, CrossingKey> crossings_;
     std::vector<CellId> fresh_;      // leaves whose corners are not evaluated yet
     std::vector<CellId> unlocated_;  // leaves whose crossings are not located yet
+    Stage stage_ = Stage::corners;
+    std::vector<std::size_t> candidates_;  // leaves the current selection looks at
+    std::size_t cursor_ = 0;               // in candidates_, or in roots_.keys
+    std::vector<std::size_t> selected_;    // those of candidates_ seen so far that it chose
+    std::vector<CellId> to_split_;
+    std::size_t split_cursor_ = 0;
+    std::vector<LeafMeshes> parts_;
+    CrossingRoots roots_;
+    PolygonizeResult result_;
 };
-
-}  // namespace
 
 void validate(const PolygonizeSettings& s) {
     for (int axis = 0; axis < 3; ++axis) {
@@ -559,26 +678,45 @@ void Polygonizer::advance(const WorkBudget& budget, std::size_t max_frontier) {
     octree_.advance(pool_, values_, budget, max_frontier);
 }
 
+Polygonizer::~Polygonizer() = default;
+
 PolygonizeResult Polygonizer::mesh(const WorkBudget& budget) {
+    slicing_.reset();
+    std::optional<PolygonizeResult> result = mesh_slice(WorkBudget(budget.cancel_flag()));
+    if (result) return std::move(*result);
+    PolygonizeResult cancelled;
+    cancelled.stats.cancelled = true;
+    return cancelled;
+}
+
+std::optional<PolygonizeResult> Polygonizer::mesh_slice(const WorkBudget& budget) {
+    if (!slicing_) {
+        slicing_ = std::make_unique<Slicing>();
+        slicing_->points_before = pool_.point_evaluations();
+        slicing_->intervals_before = pool_.interval_evaluations();
+        if (!octree_.found_region()) {
+            slicing_->mesher = std::make_unique<FrontierMesher>(pool_, lattice_, octree_.settings(),
+                                                                values_, octree_.frontier());
+        }
+    }
     const auto start = std::chrono::steady_clock::now();
-    const std::size_t points_before = pool_.point_evaluations();
-    const std::size_t intervals_before = pool_.interval_evaluations();
+    const bool done = !slicing_->mesher || slicing_->mesher->advance(budget);
+    slicing_->time += std::chrono::steady_clock::now() - start;
+    if (budget.cancelled()) slicing_.reset();  // a cancelled mesh is started again
+    if (!done || !slicing_) return std::nullopt;
     PolygonizeResult result;
-    if (octree_.found_region()) {
-        result.stats.region_cells = octree_.counts().regions;
+    if (slicing_->mesher) {
+        result = slicing_->mesher->take();
     } else {
-        FrontierMesher mesher(pool_, lattice_, octree_.settings(), values_, budget);
-        result = mesher.run(octree_.frontier());
+        result.stats.region_cells = octree_.counts().regions;
     }
     PolygonizeStats& stats = result.stats;
-    stats.cancelled = budget.cancelled();
-    if (stats.cancelled) result.mesh = Mesh{};
-    stats.evaluations = pool_.point_evaluations() - points_before;
-    stats.interval_evaluations = pool_.interval_evaluations() - intervals_before;
+    stats.evaluations = pool_.point_evaluations() - slicing_->points_before;
+    stats.interval_evaluations = pool_.interval_evaluations() - slicing_->intervals_before;
     stats.triangles = result.mesh.triangle_count();
     stats.vertices = result.mesh.vertex_count();
-    stats.time_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    stats.time_ms = std::chrono::duration<double, std::milli>(slicing_->time).count();
+    slicing_.reset();
     return result;
 }
 

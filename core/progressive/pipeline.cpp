@@ -193,8 +193,16 @@ void Pipeline::advance_phase1(const WorkBudget& budget) {
 
 void Pipeline::finish_phase1(const WorkBudget& budget) {
     if (field_changing_ && refiner_->field_change_pending()) return;  // decide once moved
-    PolygonizeResult result = phase1_mesh(budget);
-    if (budget.cancelled()) return;
+    // The final mesh can take seconds: made over as many steps as it needs (but the first
+    // step's mesh is made in it).
+    if (!final_mesh_) {
+        final_mesh_ = phase1_->mesh_slice(refiner_ ? budget : WorkBudget(budget.cancel_flag()));
+        if (!final_mesh_ || budget.cancelled()) return;
+        record_phase1_mesh(*final_mesh_);
+        if (refiner_ && budget.exhausted()) return;  // installed at the next step
+    }
+    PolygonizeResult result = std::move(*final_mesh_);
+    final_mesh_.reset();
     status_.resolving = false;
     status_.region = result.stats.region_cells > 0;
     status_.certified = result.stats.certified();
@@ -211,12 +219,16 @@ void Pipeline::finish_phase1(const WorkBudget& budget) {
 
 PolygonizeResult Pipeline::phase1_mesh(const WorkBudget& budget) {
     PolygonizeResult result = phase1_->mesh(budget);
+    record_phase1_mesh(result);
+    return result;
+}
+
+void Pipeline::record_phase1_mesh(const PolygonizeResult& result) {
     classified_at_last_mesh_ = phase1_->counts().classified;
     phase1_stats_ = result.stats;
     status_.unresolved_cells = result.stats.unresolved_cells;
     status_.region = result.stats.region_cells > 0;
     ++status_.phase1_meshes;
-    return result;
 }
 
 bool Pipeline::keeps_moved_mesh(const Mesh& fresh) const {
@@ -280,6 +292,7 @@ void Pipeline::set_field(std::shared_ptr<const Field> field) {
     if (!field) throw std::invalid_argument("Pipeline::set_field: null field");
     field_ = std::move(field);
     phase1_ = std::make_unique<Polygonizer>(field_, settings_.phase1);
+    final_mesh_.reset();
     shadow_.reset();
     simplifying_.reset();
     canonical_pending_ = false;

@@ -188,7 +188,8 @@ TEST(Pipeline, step_recognises_regions_where_the_equation_holds) {
 }
 
 // Cancellation (a new version, a close, a shutdown) is honoured in every loop: whenever it is
-// raised, the step returns within a few evaluation calls.
+// raised, the step returns within a few evaluation calls (the unit of work is one cell's
+// classification, whose edge root counting bisects the cell's twelve edges: tens of calls).
 TEST(Pipeline, step_honours_cancellation_in_every_loop) {
     const auto inner = test::field_of("x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8=0");
     // The whole run's evaluation calls, to place cancellations all along it.
@@ -215,7 +216,7 @@ TEST(Pipeline, step_honours_cancellation_in_every_loop) {
     }
     std::printf("most evaluation calls after a cancellation: %lld\n",
                 static_cast<long long>(worst));
-    EXPECT_LE(worst, 64);
+    EXPECT_LE(worst, 96);
 }
 
 /// The converged mesh of a new pipeline for `field`.
