@@ -274,6 +274,43 @@ test('closed with reason moved reconnects; a session that cannot be resubscribed
   client.close();
 });
 
+/** A server that is down: each socket fails as browsers and `ws` report it, `error` then `close`. */
+class RefusedSocket extends FakeSocket {
+  static opened = 0;
+  static refusing = true;
+
+  constructor(url) {
+    super(url);
+    ++RefusedSocket.opened;
+    if (!RefusedSocket.refusing) return;
+    Object.defineProperty(this, 'onopen', { set: () => {}, get: () => undefined });
+    queueMicrotask(() => {
+      this.onerror?.({});
+      this.onclose?.({ code: 1006, reason: '' });
+    });
+  }
+}
+
+test('a server that stays down is tried one attempt at a time (error then close count once)', async () => {
+  RefusedSocket.refusing = false;
+  const client = await connect('ws://h/ws', { WebSocket: RefusedSocket, decoder: new FakeMeshDecoder(), reconnectDelaysMs: [2], maxReconnectAttempts: 1000 });
+  const first = FakeSocket.last;
+  RefusedSocket.refusing = true;
+  RefusedSocket.opened = 0;
+  first.onclose({ code: 1006, reason: '' });
+  await new Promise((resolve) => setTimeout(resolve, 60));
+  const attempts = RefusedSocket.opened;
+  // At 2 ms (±20 %) apart, 60 ms allow about 25 attempts in a row; doubling would make thousands.
+  assert.ok(attempts >= 3 && attempts <= 40, `${attempts} attempts in 60 ms`);
+  RefusedSocket.refusing = false;
+  await until(() => client.connected);
+  assert.equal(client.reconnects, 1);
+  const opened = RefusedSocket.opened;
+  await new Promise((resolve) => setTimeout(resolve, 20));
+  assert.equal(RefusedSocket.opened, opened, 'no attempt left running once connected');
+  client.close();
+});
+
 test('requests made while disconnected wait for the new connection; close() ends it all', async () => {
   const client = await connect('ws://h/ws', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder(), reconnectDelaysMs: [50] });
   const first = FakeSocket.last;
