@@ -425,6 +425,17 @@ async function setBox(box) {
 
 const rowProgress = () => page.locator('.object .progress').first().textContent();
 
+/** The view box's corners in normalized device coordinates (in view: x and y within ±1). */
+const boxCornersOnScreen = () =>
+  page.evaluate(() => {
+    const { camera } = window.isomesh.viewer;
+    const b = window.isomesh.snapshot().box;
+    camera.updateMatrixWorld();
+    const corners = [];
+    for (const x of [b[0], b[1]]) for (const y of [b[2], b[3]]) for (const z of [b[4], b[5]]) corners.push(camera.position.clone().set(x, y, z).project(camera));
+    return corners.map((v) => [v.x, v.y]);
+  });
+
 test('budget 100: exactly 100 triangles for a torus, and the status line and the row show the triangles held', async () => {
   await setBudget(100);
   const s = await waitForSnapshot(page, `(s) => s.status === 'converged' && s.constraints?.triangles === 100`);
@@ -463,7 +474,18 @@ test('a budget below what the shape needs: "finding the shape…" while the serv
   // The gyroid on ±7 needs about 300 triangles for its topology. A new session (a new row) shows
   // its first mesh at once while the server resolves the topology, for about a second, saying so
   // in `progress` (an update finds the new shape aside and sends it whole).
+  const direction = () => page.evaluate(() => {
+    const { position, target } = window.isomesh.viewer.getCamera();
+    const d = position.map((p, i) => p - target[i]);
+    const length = Math.hypot(...d);
+    return d.map((c) => c / length);
+  });
+  const lookingFrom = await direction();
   await setBox([-7, 7, -7, 7, -7, 7]);
+  await waitForSnapshot(page, `(s) => s.box?.[1] === 7 && s.box[5] === 7`);
+  const corners = await boxCornersOnScreen();
+  assert.ok(corners.every(([x, y]) => Math.abs(x) <= 1 && Math.abs(y) <= 1), `the camera shows the whole new box: ${JSON.stringify(corners)}`);
+  (await direction()).forEach((c, i) => assert.ok(Math.abs(c - lookingFrom[i]) < 1e-6, 'from the side the user looked from'));
   await button('Add surface').click();
   await page.evaluate(() => {
     window.progressTexts = [];

@@ -154,9 +154,10 @@ export class App {
     this.#stateChanged();
   }
 
+  /** A box the user typed: the camera follows it (as GeoGebra's view follows its axes' ranges). */
   setBox(box) {
     this.box = box;
-    this.viewer.setBox(box);
+    this.viewer.setBox(box, { frame: 'keep' });
     for (const row of this.rows) row.surface.setBox(box);
     this.#stateChanged();
   }

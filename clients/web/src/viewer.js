@@ -153,24 +153,33 @@ export class Viewer {
     this.requestRender();
   }
 
-  /** The view box [x0, x1, y0, y1, z0, z1]: outline, axes, grid, height colours; `frame` aims the camera. */
+  /**
+   * The view box [x0, x1, y0, y1, z0, z1]: outline, axes, grid, height colours. `frame`: aim the
+   * camera at it, from the front-right (true) or from where the camera looks now ('keep').
+   */
   setBox(box, { frame = false } = {}) {
     const min = new Vector3(box[0], box[2], box[4]);
     const max = new Vector3(box[1], box[3], box[5]);
     this.boxHelper.box.set(min, max);
     this.axes.setBox(box);
     this.uniforms.zRange.value = [box[4], box[5]];
-    if (frame) this.frameBox();
+    if (frame) this.frameBox({ keepDirection: frame === 'keep' });
     this.requestRender();
   }
 
-  /** Looks at the box from the front-right, above, at a distance that shows all of it. */
-  frameBox() {
+  /**
+   * Looks at the box from the front-right, above (or, with `keepDirection`, from the side the
+   * camera is on now), at a distance that shows all of it: the box's bounding sphere fits the
+   * vertical field of view (the horizontal one is wider on a landscape view).
+   */
+  frameBox({ keepDirection = false } = {}) {
     const box = this.boxHelper.box;
     const center = box.getCenter(new Vector3());
     const radius = box.getSize(new Vector3()).length() / 2;
-    const distance = radius / Math.sin((this.camera.fov * Math.PI) / 360);
-    const direction = new Vector3(1.2, 0.9, 0.75).normalize();
+    const halfFov = Math.atan(Math.min(1, this.camera.aspect) * Math.tan((this.camera.fov * Math.PI) / 360));
+    const distance = radius / Math.sin(halfFov);
+    const current = this.camera.position.clone().sub(this.controls.target);
+    const direction = keepDirection && current.lengthSq() > 0 ? current.normalize() : new Vector3(1.2, 0.9, 0.75).normalize();
     this.setCamera({ position: center.clone().addScaledVector(direction, distance).toArray(), target: center.toArray() });
   }
 
