@@ -75,12 +75,17 @@ const coded = (code, message = code) => Object.assign(new Error(message), { code
 const tick = () => new Promise((resolve) => setImmediate(resolve));
 const shared = (parameters = { a: 1 }) => () => ({ parameters, box: [-1, 1, -1, 1, -1, 1], constraints: {} });
 
-test('Surface: edits made while an update is in flight are merged into one, the latest value winning', async () => {
+/** A surface of `expression` attached to a fake client, once its session is made. */
+async function attached(expression, options = {}) {
   const client = fakeClient();
-  const surface = new Surface({ expression: 'x^2+y^2+z^2=a', shared: shared() });
+  const surface = new Surface({ expression, shared: shared(), ...options });
   surface.attach(client);
   await tick();
-  const session = client.sessions[0];
+  return { client, surface, session: client.sessions[0] };
+}
+
+test('Surface: edits made while an update is in flight are merged into one, the latest value winning', async () => {
+  const { client, surface, session } = await attached('x^2+y^2+z^2=a');
   assert.deepEqual(client.creates[0].parameters, { a: 1 });
   surface.setParameters({ a: 1.1 });
   for (const a of [1.2, 1.3, 1.4]) surface.setParameters({ a });
@@ -101,11 +106,7 @@ test('Surface: edits made while an update is in flight are merged into one, the 
 });
 
 test('Surface: the next update goes after a short wait when the mesh is slow to come', async () => {
-  const client = fakeClient();
-  const surface = new Surface({ expression: 'x=a', shared: shared() });
-  surface.attach(client);
-  await tick();
-  const session = client.sessions[0];
+  const { surface, session } = await attached('x=a');
   surface.setParameters({ a: 2 });
   surface.setParameters({ a: 3 });
   session.answer();
@@ -193,11 +194,7 @@ test("Surface: status follows the session: the shape being found, refined, then 
 });
 
 test('Surface: a dropped connection keeps the session; edits wait and go after the reconnection', async () => {
-  const client = fakeClient();
-  const surface = new Surface({ expression: 'x=a', shared: shared() });
-  surface.attach(client);
-  await tick();
-  const session = client.sessions[0];
+  const { client, surface, session } = await attached('x=a');
   session.converge();
   client.connected = false;
   session.emit('disconnected');
@@ -214,11 +211,7 @@ test('Surface: a dropped connection keeps the session; edits wait and go after t
 });
 
 test('Surface: a paused surface pauses its session again after resubscribing (the server does not keep it)', async () => {
-  const client = fakeClient();
-  const surface = new Surface({ expression: 'x=1', shared: shared() });
-  surface.attach(client);
-  await tick();
-  const session = client.sessions[0];
+  const { surface, session } = await attached('x=1');
   await surface.setPaused(true);
   assert.equal(session.pauses, 1);
   session.emit('resubscribed', session.state);
