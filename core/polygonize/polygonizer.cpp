@@ -25,11 +25,16 @@
 #include "polygonize/polygonizer.h"
 
 #include <algorithm>
+#include <cassert>
 #include <chrono>
 #include <cmath>
+#include <memory>
+#include <optional>
 #include <stdexcept>
 #include <thread>
+#include <type_traits>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -193,8 +198,8 @@ std::vector<FrontierCell> split_cells(EvaluatorPool& workers, const Lattice& lat
             for (int octant = 0; octant < 8; ++octant)
                 subtrees[i].push_back({which[i].child(octant), CellState::Pending});
         } else {
-            subtrees[i] = split_settled(evaluator, lattice, settings, which[i], values,
-                                        evaluated[i], budget);
+            subtrees[i] =
+                split_settled(evaluator, lattice, settings, which[i], values, evaluated[i], budget);
         }
     });
     std::vector<FrontierCell> result;
@@ -209,22 +214,6 @@ std::vector<FrontierCell> split_cells(EvaluatorPool& workers, const Lattice& lat
         } else {
             result.push_back(f);
         }
-    }
-    return result;
-}
-
-/// The leaves for which `predicate` holds, in order (evaluated in parallel).
-template <typename Predicate>
-std::vector<CellId> select(EvaluatorPool& workers, const std::vector<CellId>& leaves,
-                           const Predicate& predicate) {
-    std::vector<std::uint8_t> chosen(leaves.size());
-    workers.for_each(task_count(leaves.size(), kCellsPerTask), [&](std::size_t task, auto&) {
-        const std::size_t end = std::min(leaves.size(), (task + 1) * kCellsPerTask);
-        for (std::size_t i = task * kCellsPerTask; i < end; ++i) chosen[i] = predicate(leaves[i]);
-    });
-    std::vector<CellId> result;
-    for (std::size_t i = 0; i < leaves.size(); ++i) {
-        if (chosen[i]) result.push_back(leaves[i]);
     }
     return result;
 }
@@ -325,9 +314,8 @@ class FrontierMesher {
 
     PolygonizeResult run(std::vector<FrontierCell> frontier) {
         frontier_ = std::move(frontier);
-        preview_ = std::any_of(frontier_.begin(), frontier_.end(), [](const FrontierCell& f) {
-            return f.state == CellState::Pending;
-        });
+        preview_ = std::any_of(frontier_.begin(), frontier_.end(),
+                               [](const FrontierCell& f) { return f.state == CellState::Pending; });
         leaves_ = cells_of(frontier_);
         finest_ = deepest(frontier_);
         fresh_ = leaves_;
@@ -356,19 +344,31 @@ class FrontierMesher {
     }
 
   private:
+    /// A leaf's meshing state, kept beside leaves_.
+    struct LeafState {
+        std::unique_ptr<LeafMeshes> mesh;  // none while it has no triangles (most leaves)
+        bool grade = true;                 // needs_grading must look at it (again)
+        bool stale = true;                 // its mesh must be made (again)
+    };
+
     /// Grades the frontier, then meshes every leaf; splits the leaves whose faces do not match
     /// their finer neighbours, and again, until all match (leaves of equal size always do, so
-    /// this ends).
+    /// this ends). Incremental: after a split, only the new leaves and the leaves across the
+    /// split cells' faces are graded and meshed again (a leaf's grading and mesh depend only on
+    /// itself and its face neighbours), so the result is that of meshing everything each time.
     std::vector<LeafMeshes> mesh_leaves() {
-        std::vector<LeafMeshes> parts;
+        index_.emplace(leaves_);
+        states_.clear();
+        states_.resize(leaves_.size());
         while (!budget_.cancelled()) {
             evaluate_corners(workers_, lattice_, fresh_, values_, budget_);
             if (budget_.cancelled()) break;  // corners are missing: nothing below may run
             fresh_.clear();
-            const LeafIndex index(leaves_);
-            const LeafMeshingInput input{lattice_, values_, crossings_, index};
-            const std::vector<CellId> ungraded = select(
-                workers_, leaves_, [&](const CellId& leaf) { return needs_grading(input, leaf); });
+            const LeafMeshingInput input{lattice_, values_, crossings_, *index_};
+            const std::vector<std::size_t> ungraded =
+                select(flagged(&LeafState::grade),
+                       [&](std::size_t i) { return needs_grading(input, leaves_[i]); });
+            for (LeafState& state : states_) state.grade = false;
             if (!ungraded.empty()) {
                 split(ungraded);
                 continue;
@@ -376,36 +376,126 @@ class FrontierMesher {
             locate_crossings(workers_, lattice_, unlocated_, finest_, values_, crossings_, budget_);
             if (budget_.cancelled()) break;
             unlocated_.clear();
-            parts.assign(task_count(leaves_.size(), kCellsPerTask), {});
-            workers_.for_each(parts.size(), [&](std::size_t task, CountingEvaluator& evaluator) {
-                const std::size_t end = std::min(leaves_.size(), (task + 1) * kCellsPerTask);
-                for (std::size_t i = task * kCellsPerTask; i < end && !budget_.cancelled(); ++i)
-                    mesh_leaf(evaluator, input, leaves_[i], parts[task]);
-            });
-            std::vector<CellId> unmatched;
-            for (const LeafMeshes& part : parts) {
-                unmatched.insert(unmatched.end(), part.unmatched.begin(), part.unmatched.end());
-            }
+            const std::vector<std::size_t> unmatched = mesh_stale(input);
             if (unmatched.empty() || budget_.cancelled()) break;
             split(unmatched);
+        }
+        std::vector<LeafMeshes> parts;
+        for (LeafState& state : states_) {
+            if (state.mesh) parts.push_back(std::move(*state.mesh));
         }
         return parts;
     }
 
-    void split(const std::vector<CellId>& which) {
+    /// Meshes the stale leaves; returns the indices of those that did not match.
+    std::vector<std::size_t> mesh_stale(const LeafMeshingInput& input) {
+        return select(flagged(&LeafState::stale), [&](std::size_t i, CountingEvaluator& evaluator) {
+            LeafState& state = states_[i];
+            LeafMeshes mesh;
+            mesh_leaf(evaluator, input, leaves_[i], mesh);
+            state.stale = false;
+            const bool matched = mesh.unmatched.empty();
+            state.mesh = mesh.triangles.empty() && mesh.extra_positions.empty()
+                             ? nullptr
+                             : std::make_unique<LeafMeshes>(std::move(mesh));
+            return !matched;
+        });
+    }
+
+    /// The indices of the leaves with `flag` set, in order.
+    std::vector<std::size_t> flagged(bool LeafState::*flag) const {
+        std::vector<std::size_t> out;
+        for (std::size_t i = 0; i < states_.size(); ++i) {
+            if (states_[i].*flag) out.push_back(i);
+        }
+        return out;
+    }
+
+    /// Those of `candidates` (leaf indices, in order) for which `predicate` holds, evaluated in
+    /// parallel (the predicate may take the task's evaluator), in order.
+    template <typename Predicate>
+    std::vector<std::size_t> select(const std::vector<std::size_t>& candidates,
+                                    const Predicate& predicate) {
+        std::vector<std::uint8_t> chosen(candidates.size());
+        workers_.for_each(
+            task_count(candidates.size(), kCellsPerTask),
+            [&](std::size_t task, CountingEvaluator& evaluator) {
+                const std::size_t end = std::min(candidates.size(), (task + 1) * kCellsPerTask);
+                for (std::size_t k = task * kCellsPerTask; k < end && !budget_.cancelled(); ++k) {
+                    if constexpr (std::is_invocable_v<Predicate, std::size_t>) {
+                        chosen[k] = predicate(candidates[k]);
+                    } else {
+                        chosen[k] = predicate(candidates[k], evaluator);
+                    }
+                }
+            });
+        std::vector<std::size_t> result;
+        for (std::size_t k = 0; k < candidates.size(); ++k) {
+            if (chosen[k]) result.push_back(candidates[k]);
+        }
+        return result;
+    }
+
+    /// Splits the leaves at `which` (indices, in order), keeping the index, the leaves' states
+    /// and the crossings up to date.
+    void split(const std::vector<std::size_t>& which) {
+        std::vector<CellId> cells;
+        cells.reserve(which.size());
+        for (std::size_t i : which) cells.push_back(leaves_[i]);
         const std::size_t before = fresh_.size();
-        frontier_ = split_cells(workers_, lattice_, settings_, frontier_, which, preview_, values_,
+        frontier_ = split_cells(workers_, lattice_, settings_, frontier_, cells, preview_, values_,
                                 fresh_, budget_);
-        leaves_ = cells_of(frontier_);
+        std::vector<CellId> old_leaves = std::exchange(leaves_, cells_of(frontier_));
+        carry_states(old_leaves);
+        for (const CellId& cell : cells) {
+            for (const CellId& n : index_->face_neighbours(cell)) {
+                LeafState& state = states_[position(n)];
+                state.grade = state.stale = true;
+            }
+        }
         const int finest = deepest(frontier_);
         if (finest != finest_) {
             // Crossings are named by steps of the finest leaf: all are located again.
             finest_ = finest;
             crossings_.clear();
             unlocated_ = leaves_;
+            for (LeafState& state : states_) state.stale = true;
         } else {
             unlocated_.insert(unlocated_.end(), fresh_.begin() + before, fresh_.end());
         }
+    }
+
+    /// Moves the states of the leaves kept from `old_leaves` to their places in leaves_; the
+    /// leaves that replaced a split one start fresh, and the index learns of them. (Both lists
+    /// are in octree order, a split cell's leaves where it was.)
+    void carry_states(const std::vector<CellId>& old_leaves) {
+        std::vector<LeafState> states(leaves_.size());
+        std::size_t j = 0;
+        for (std::size_t i = 0; i < old_leaves.size(); ++i) {
+            const CellId& old = old_leaves[i];
+            if (j < leaves_.size() && leaves_[j] == old) {
+                states[j++] = std::move(states_[i]);
+                continue;
+            }
+            const std::size_t first = j;  // old was split: its subtree's leaves follow
+            while (j < leaves_.size() && leaves_[j].depth > old.depth &&
+                   leaves_[j].ancestor(old.depth) == old) {
+                ++j;
+            }
+            index_->replace(old, std::span(leaves_).subspan(first, j - first));
+        }
+        assert(j == leaves_.size());
+        states_ = std::move(states);
+    }
+
+    /// The index in leaves_ of `leaf` (leaves_ is in octree order: a binary search).
+    std::size_t position(const CellId& leaf) const {
+        const std::uint64_t order = lattice_.octree_order(leaf);
+        const auto it = std::lower_bound(
+            leaves_.begin(), leaves_.end(), order,
+            [&](const CellId& c, std::uint64_t o) { return lattice_.octree_order(c) < o; });
+        assert(it != leaves_.end() && *it == leaf);
+        return static_cast<std::size_t>(it - leaves_.begin());
     }
 
     EvaluatorPool& workers_;
@@ -416,6 +506,8 @@ class FrontierMesher {
     std::vector<FrontierCell> frontier_;
     bool preview_ = false;  // some cell is pending: the octree is unfinished
     std::vector<CellId> leaves_;
+    std::optional<LeafIndex> index_;  // of leaves_
+    std::vector<LeafState> states_;   // of leaves_
     int finest_ = 0;
     std::unordered_map<std::uint64_t, CrossingKey> crossings_;
     std::vector<CellId> fresh_;      // leaves whose corners are not evaluated yet
