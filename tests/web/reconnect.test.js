@@ -3,7 +3,8 @@
 // (SIGKILL) and the status line says the viewer is disconnected and reconnecting, the meshes still
 // shown; the server starts again on the same port and file, and the viewer, through the client
 // library's reconnection, shows every row's same session again with the identical mesh (the same
-// triangles at bit-equal positions). Screenshots of the three moments go to
+// triangles at bit-equal positions). The <isomesh-surface> element on its example page says it is
+// disconnected and comes back to its session too. Screenshots of the three moments go to
 // build/test-artifacts/web/reconnect-*.png.
 
 import assert from 'node:assert/strict';
@@ -61,6 +62,23 @@ test('the viewer shows a server crash and comes back to the same session and mes
     assert.ok(before.every((m) => m.triangles.length > 100), 'two surfaces shown');
     assert.notEqual(before[0].session, before[1].session, 'a session each');
     await page.screenshot({ path: join(ARTIFACTS, 'reconnect-1-before.png') });
+    // The <isomesh-surface> element, on its example page, goes through the same crash.
+    const embed = await context.newPage();
+    embed.on('pageerror', (error) => pageErrors.push(`embed: ${error.message}`));
+    await embed.goto(`${server.url}embed.html`);
+    const element = (predicate, arg) =>
+      embed.waitForFunction(
+        ([source, value]) => {
+          const e = document.querySelector('#sphere');
+          const s = e?.snapshot();
+          const line = e?.shadowRoot.querySelector('[role=status]').textContent ?? '';
+          // eslint-disable-next-line no-new-func
+          return s && new Function('s', 'line', 'arg', `return (${source})(s, line, arg)`)(s, line, value) ? { ...s, line } : null;
+        },
+        [predicate, arg],
+        { timeout: 60000, polling: 50 },
+      ).then((handle) => handle.jsonValue());
+    const elementBefore = await element(`(s) => s.status === 'converged' && s.triangles > 100`);
 
     await server.kill();
     await status('disconnected');
@@ -70,6 +88,9 @@ test('the viewer shows a server crash and comes back to the same session and mes
     assert.deepEqual(during.map(([, count]) => count), before.map((m) => m.triangles.length), 'and their meshes stay shown');
     assert.match(await page.locator('.object .progress').first().textContent(), /^reconnecting… · \d+ triangles$/);
     await page.screenshot({ path: join(ARTIFACTS, 'reconnect-2-disconnected.png') });
+    const elementDuring = await element(`(s, line) => line.startsWith('disconnected')`);
+    assert.equal(elementDuring.line, `disconnected (reconnecting) · ${elementBefore.triangles} triangles`, 'the element says so, its mesh still shown');
+    await embed.locator('#sphere').screenshot({ path: join(ARTIFACTS, 'reconnect-2-element.png') });
 
     server = await startServer([...store, '--port', String(server.port)]);
     await page.waitForFunction((ids) => {
@@ -83,6 +104,9 @@ test('the viewer shows a server crash and comes back to the same session and mes
     }
     assert.equal(await page.evaluate(() => window.isomesh.app.client.reconnects), 1, "the library's reconnection");
     assert.doesNotMatch(await page.textContent('#status'), /disconnected/);
+    const elementAfter = await element(`(s, line, id) => s.status === 'converged' && s.session === id && !line.startsWith('disconnected')`, elementBefore.session);
+    assert.equal(elementAfter.triangles, elementBefore.triangles, 'the element: the same session and triangle count');
+    assert.match(elementAfter.line, /^\d+ triangles · converged$/);
     await page.screenshot({ path: join(ARTIFACTS, 'reconnect-3-after.png') });
     assert.deepEqual(pageErrors, []);
   } finally {
