@@ -13,7 +13,7 @@ import { test } from 'node:test';
 import validator from 'gltf-validator';
 import { PNG } from 'pngjs';
 
-import { ARTIFACTS, WAIT_MS, canvasShot, convergedOn, snapshot, statusTriangles, typeEquation, viewerForTests, waitForSnapshot } from './browser.js';
+import { ARTIFACTS, WAIT_MS, boxCornersOnScreen, canvasShot, convergedOn, snapshot, statusTriangles, typeEquation, viewerForTests, waitForSnapshot } from './browser.js';
 import { coloredFraction, differingFraction } from './pixels.js';
 
 let page;
@@ -425,17 +425,6 @@ async function setBox(box) {
 
 const rowProgress = () => page.locator('.object .progress').first().textContent();
 
-/** The view box's corners in normalized device coordinates (in view: x and y within ±1). */
-const boxCornersOnScreen = () =>
-  page.evaluate(() => {
-    const { camera } = window.isomesh.viewer;
-    const b = window.isomesh.snapshot().box;
-    camera.updateMatrixWorld();
-    const corners = [];
-    for (const x of [b[0], b[1]]) for (const y of [b[2], b[3]]) for (const z of [b[4], b[5]]) corners.push(camera.position.clone().set(x, y, z).project(camera));
-    return corners.map((v) => [v.x, v.y]);
-  });
-
 test('budget 100: exactly 100 triangles for a torus, and the status line and the row show the triangles held', async () => {
   await setBudget(100);
   const s = await waitForSnapshot(page, `(s) => s.status === 'converged' && s.constraints?.triangles === 100`);
@@ -483,7 +472,7 @@ test('a budget below what the shape needs: "finding the shape…" while the serv
   const lookingFrom = await direction();
   await setBox([-7, 7, -7, 7, -7, 7]);
   await waitForSnapshot(page, `(s) => s.box?.[1] === 7 && s.box[5] === 7`);
-  const corners = await boxCornersOnScreen();
+  const corners = await boxCornersOnScreen(page);
   assert.ok(corners.every(([x, y]) => Math.abs(x) <= 1 && Math.abs(y) <= 1), `the camera shows the whole new box: ${JSON.stringify(corners)}`);
   (await direction()).forEach((c, i) => assert.ok(Math.abs(c - lookingFrom[i]) < 1e-6, 'from the side the user looked from'));
   await button('Add surface').click();
