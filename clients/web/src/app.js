@@ -9,13 +9,13 @@ import { RECONNECT_DELAYS_MS, connect } from 'isomesh-client';
 
 import { Connection } from './connection.js';
 import { EMPTY_MESSAGE, prepareEquation } from './equation_check.js';
-import { outcomeNotes, uncertain } from './outcome.js';
+import { endedMessage, outcomeNotes, uncertain } from './outcome.js';
 import { parameterNames } from './parameters.js';
 import { Surface } from './surface.js';
 import { MAX_SURFACES } from './url_state.js';
 
 export const PALETTE = ['#3d7fd6', '#d9553d', '#3f9e4d', '#8e5bd0', '#1f9fa5', '#c98a1b', '#d6457e', '#5f6b7a'];
-const STATUS_ORDER = ['disconnected', 'connecting', 'meshing', 'resolving', 'refining', 'paused', 'converged'];
+const STATUS_ORDER = ['disconnected', 'connecting', 'meshing', 'resolving', 'refining', 'paused', 'converged', 'ended'];
 
 export class App {
   /**
@@ -308,7 +308,8 @@ export class App {
       if (error) row.view.showError(error.text ?? '', error.message, error.column ?? null);
       else row.view.clearError();
     }
-    row.view.setNotes(error ? row.notes : [...row.notes, ...outcomeNotes(finished, s.triangles, budget)]);
+    const said = s.ended ? [endedMessage(s.ended)] : outcomeNotes(finished, s.triangles, budget);
+    row.view.setNotes(error ? row.notes : [...row.notes, ...said]);
   }
 
   #stateChanged() {

@@ -23,7 +23,7 @@ import dracoWasmUrl from 'draco3d/draco_decoder.wasm?url';
 
 import { Connection } from './connection.js';
 import { prepareEquation } from './equation_check.js';
-import { outcomeNotes, uncertain } from './outcome.js';
+import { endedMessage, outcomeNotes, uncertain } from './outcome.js';
 import { parameterAttributes } from './parameters.js';
 import { FramePump } from './frame_pump.js';
 import { Surface } from './surface.js';
@@ -197,7 +197,7 @@ export class IsomeshSurfaceElement extends HTMLElement {
     if (what === 'session') this.view.showSlots(s.session?.mesh.slots ?? null);
     this.viewer?.requestRender();
     const finished = s.finished;
-    const notes = outcomeNotes(finished, s.triangles, s.session?.state?.constraints?.triangles ?? 0);
+    const notes = s.ended ? [endedMessage(s.ended)] : outcomeNotes(finished, s.triangles, s.session?.state?.constraints?.triangles ?? 0);
     const connection = this.connection;
     if (connection && connection.state === 'disconnected') {
       this.#showStatus(`disconnected (${connection.detail}) · ${s.triangles} triangles`, 'note');

@@ -22,7 +22,7 @@ import { DARK_THEME, LIGHT_THEME, Viewer } from './viewer.js';
 
 const STORAGE_KEY = 'isomesh.viewer.scene';
 /** The status line's words for states whose name is not plain enough. */
-const STATUS_WORDS = { resolving: 'finding the shape' };
+const STATUS_WORDS = { resolving: 'finding the shape', ended: 'session ended' };
 const URL_WRITE_DELAY_MS = 250;
 const $ = (selector) => document.querySelector(selector);
 

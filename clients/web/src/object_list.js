@@ -178,6 +178,7 @@ export class ObjectRow {
     const text = {
       empty: 'Type an equation and press Enter',
       error: '',
+      ended: 'ended',
       connecting: 'connecting…',
       disconnected: triangles > 0 ? `reconnecting… · ${count}` : 'reconnecting…',
       meshing: 'finding the shape…',

@@ -11,6 +11,15 @@ export const REGION_MESSAGE =
 export const UNCERTAIN_TITLE =
   'Near a few spots (such as the tip of a cone or a sharp crease) the shape could not be proven exactly; there it is drawn as a close guess.';
 
+/**
+ * The message for a surface whose session the server ended on purpose (`closed` with `reason`):
+ * `expired` after its idle time without a change (an hour by default), `closed` by another client.
+ */
+export function endedMessage(reason) {
+  const why = reason === 'expired' ? 'after a long time without a change' : `(${reason})`;
+  return `The server ended this surface's session ${why}. Press Enter or change a value to draw it again.`;
+}
+
 /** The message for a surface whose shape needs more triangles than the budget allows. */
 export function budgetMessage(triangles, budget) {
   return `This shape needs at least ${triangles} triangles (for all its pieces and holes), more than the maximum of ${budget}: it is shown with ${triangles}.`;

@@ -14,7 +14,9 @@
 // subscribes again (same session id, same mesh; clients/js README, "Reconnection") and edits made
 // meanwhile wait for it. A new session is made only when the server says the old one is gone:
 // `closed` with reason `lost` (it could not be subscribed again: a server without a store
-// restarted) or `shutdown`, or an `unknown_session` error answering a request.
+// restarted) or `shutdown`, or an `unknown_session` error answering a request. A session the
+// server ended on purpose (`expired`: no request for its idle time; `closed` by another client)
+// is not made again at once: the surface says so ('ended') and the next edit or Enter makes it.
 
 import { missingParameters, parameterNames, valuesFor } from './parameters.js';
 
@@ -27,7 +29,7 @@ const RETRIED = new Set(['timeout', 'closed', 'unavailable', 'store_unavailable'
 const RECREATED = new Set(['lost', 'shutdown']);
 
 /** What a row's progress line says, from the surface's state. */
-export const SURFACE_STATES = ['empty', 'error', 'connecting', 'disconnected', 'meshing', 'resolving', 'refining', 'converged', 'paused'];
+export const SURFACE_STATES = ['empty', 'error', 'ended', 'connecting', 'disconnected', 'meshing', 'resolving', 'refining', 'converged', 'paused'];
 
 export class Surface {
   /**
@@ -53,6 +55,8 @@ export class Surface {
     this.unfollow = null; // stops listening to the client
     this.errorMax = null; // of the current function version only
     this.paused = false;
+    /** The `closed` reason of a session the server ended on purpose, until a new one is made. */
+    this.ended = null;
     /** Function versions whose mesh has been shown: how many times the surface moved. */
     this.versionsShown = 0;
     this.lastShownVersion = 0;
@@ -132,7 +136,11 @@ export class Surface {
     if (this.expression === '' && !s) return 'empty';
     if (!this.client) return 'connecting';
     if (!this.client.connected) return 'disconnected'; // the mesh on hand stays shown
-    if (!s) return this.error && !this.error.transient && !this.creating ? 'error' : 'meshing';
+    if (!s && !this.creating) {
+      if (this.error && !this.error.transient) return 'error';
+      if (this.ended) return 'ended';
+    }
+    if (!s) return 'meshing';
     if (this.paused) return 'paused';
     if (this.finished) return 'converged'; // a version may converge with no frame
     if (this.#busy || !s.mesh.synchronized || s.mesh.functionVersion < (s.state?.version ?? 0)) return 'meshing';
@@ -169,6 +177,7 @@ export class Surface {
       versionsShown: this.versionsShown,
       resolving: this.resolving,
       outcome: outcomeOf(this.finished),
+      ended: this.ended,
       parameters: { ...(s?.state?.parameters ?? {}) },
       box: s?.state?.box ?? null,
       constraints: s?.state?.constraints ?? null,
@@ -210,6 +219,7 @@ export class Surface {
       return;
     }
     this.session = session;
+    this.ended = null;
     this.error = null;
     this.errorMax = null;
     this.lastShownVersion = 0; // versions count from 1 in every session
@@ -295,8 +305,12 @@ export class Surface {
     session.on('closed', (m) => {
       this.#note(`closed (${m.reason})`);
       if (!current()) return;
-      if (RECREATED.has(m.reason)) this.#gone(session);
-      else this.#forget();
+      if (RECREATED.has(m.reason)) {
+        this.#gone(session);
+        return;
+      }
+      if (m.reason !== 'error') this.ended = m.reason; // after `error`, the error says why
+      this.#forget();
     });
   }
 

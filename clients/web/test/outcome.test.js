@@ -1,7 +1,7 @@
 import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
-import { NO_SURFACE_MESSAGE, REGION_MESSAGE, budgetMessage, outcomeNotes, uncertain } from '../src/outcome.js';
+import { NO_SURFACE_MESSAGE, REGION_MESSAGE, budgetMessage, endedMessage, outcomeNotes, uncertain } from '../src/outcome.js';
 
 const converged = (fields) => ({ type: 'converged', version: 1, triangles: 120, outcome: 'surface', certified: true, unresolved_cells: 0, budget_unreachable: false, ...fields });
 
@@ -26,4 +26,9 @@ test('uncertain: a converged surface with cells left without proof', () => {
   assert.equal(uncertain(converged({ certified: false, unresolved_cells: 3 })), true, "a cone's apex");
   assert.equal(uncertain(converged({ certified: false, unresolved_cells: 0 })), false);
   assert.equal(uncertain(converged({ outcome: 'region_not_surface', certified: false, unresolved_cells: 9 })), false, 'the region message says it all');
+});
+
+test('endedMessage: an expired session in plain words, another reason named', () => {
+  assert.match(endedMessage('expired'), /ended this surface's session after a long time without a change\. Press Enter/);
+  assert.match(endedMessage('closed'), /session \(closed\)\. Press Enter/);
 });

@@ -243,9 +243,17 @@ test('Surface: a session the server lost is made again with the current values; 
   await tick();
   assert.equal(client.creates.length, 3, 'expired: no new session until the next edit');
   assert.equal(surface.session, null);
+  assert.equal(surface.status, 'ended', 'and the surface says so');
+  assert.equal(surface.snapshot().ended, 'expired');
   surface.setExpression('x=a+1');
+  assert.equal(surface.status, 'meshing');
   await tick();
   assert.equal(client.creates.length, 4);
+  assert.equal(surface.ended, null);
+
+  client.sessions[3].emit('error', coded('eval_timeout', 'too slow'));
+  client.sessions[3].emit('closed', { type: 'closed', reason: 'error' });
+  assert.equal(surface.status, 'error', 'closed after an error: the error says why');
 });
 
 test('Surface: a create the server cannot take now is made again later, and the server says why meanwhile', async (t) => {
