@@ -10,6 +10,7 @@
 #include "mesh/simplify.h"
 
 #include <array>
+#include <cassert>
 #include <queue>
 #include <vector>
 
@@ -70,13 +71,14 @@ class Simplifier {
         for (std::uint32_t v = 0; v < quadrics_.size(); ++v) push_edges(v);
     }
 
-    SimplifyReport run(std::size_t target, const WorkBudget& budget) {
-        SimplifyReport report;
-        std::size_t popped = 0;
+    /// Collapses until the mesh has at most `target` triangles, no candidate is left, or the
+    /// budget is exhausted (checked every kCheckInterval candidates); true when not stopped by
+    /// the budget. Resumable: a later call goes on with the same queue.
+    bool advance(std::size_t target, const WorkBudget& budget, SimplifyReport& report) {
         while (mesh_.live_triangles() > target && !queue_.empty()) {
-            if (++popped % kCheckInterval == 0 && budget.exhausted()) {
-                report.cancelled = true;
-                break;
+            if (++popped_ % kCheckInterval == 0 && budget.exhausted()) {
+                report.cancelled = budget.cancelled();
+                return false;
             }
             const Candidate c = queue_.top();
             queue_.pop();
@@ -91,6 +93,17 @@ class Simplifier {
         }
         report.triangles = mesh_.live_triangles();
         report.reached = report.triangles <= target;
+        return true;
+    }
+
+    void compact() { mesh_.compact(); }
+
+    SimplifyReport run(std::size_t target, const WorkBudget& budget) {
+        SimplifyReport report;
+        if (!advance(target, budget, report)) {
+            report.cancelled = true;  // cut short, by cancellation or by time
+            report.triangles = mesh_.live_triangles();
+        }
         mesh_.compact();
         return report;
     }
@@ -157,6 +170,7 @@ class Simplifier {
     std::vector<std::uint32_t> stamps_;
     std::vector<std::vector<Candidate>> blocked_;  // refused candidates, by the vertex to move
     std::priority_queue<Candidate, std::vector<Candidate>, std::greater<>> queue_;
+    std::size_t popped_ = 0;
 };
 
 }  // namespace
@@ -170,6 +184,40 @@ SimplifyReport simplify_to_budget(Mesh& mesh, std::span<const std::uint8_t> box_
         return report;
     }
     return Simplifier(mesh, box_faces).run(target_triangles, budget);
+}
+
+class Simplification::Collapses : public Simplifier {
+  public:
+    using Simplifier::Simplifier;
+};
+
+Simplification::Simplification(Mesh mesh, std::vector<std::uint8_t> box_faces,
+                               std::size_t target_triangles)
+    : mesh_(std::make_unique<Mesh>(std::move(mesh))),
+      box_faces_(std::move(box_faces)),
+      target_(target_triangles) {
+    if (mesh_->triangle_count() <= target_) {
+        report_.triangles = mesh_->triangle_count();
+        report_.reached = true;
+        done_ = true;
+        return;
+    }
+    collapses_ = std::make_unique<Collapses>(*mesh_, box_faces_);
+}
+
+Simplification::~Simplification() = default;
+
+bool Simplification::advance(const WorkBudget& budget) {
+    if (done_) return true;
+    done_ = collapses_->advance(target_, budget, report_);
+    if (done_) collapses_->compact();
+    return done_;
+}
+
+Mesh Simplification::take() {
+    assert(done_);
+    collapses_.reset();
+    return std::move(*mesh_);
 }
 
 }  // namespace isomesh

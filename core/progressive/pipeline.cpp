@@ -2,6 +2,7 @@
 #include "progressive/pipeline.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <stdexcept>
 #include <utility>
 
@@ -73,6 +74,14 @@ Pipeline::~Pipeline() = default;
 
 PipelineStep Pipeline::step(const WorkBudget& budget) {
     PipelineStep out;
+    if (simplifying_) {
+        // A large phase-1 mesh on its way to the budget: nothing else moves meanwhile.
+        if (continue_install(budget) && !phase1_ && !budget.exhausted())
+            refine(out, {kAllOperations, budget});
+        refine(out, {0, budget});
+        out.cancelled = budget.cancelled();
+        return out;
+    }
     const bool first = !refiner_;
     const bool resolving = phase1_ != nullptr;
     if (first) {
@@ -89,7 +98,7 @@ PipelineStep Pipeline::step(const WorkBudget& budget) {
     }
     // Phase 1 just ended: refine with what the step has left, so that a mesh already meeting the
     // constraint leaves flagged converged.
-    if (refiner_ && resolving && !phase1_ && !budget.exhausted())
+    if (refiner_ && resolving && !phase1_ && !simplifying_ && !budget.exhausted())
         refine(out, {kAllOperations, budget});
     if (refiner_ && first) {
         out.delta = refiner_->snapshot();
@@ -179,7 +188,7 @@ void Pipeline::advance_phase1(const WorkBudget& budget) {
                        kRemeshGrowth * static_cast<double>(classified_at_last_mesh_);
     if (!field_changing_ && grown &&
         counts.pending + counts.leaves + counts.unresolved <= settings_.max_intermediate_cells)
-        install(phase1_mesh(budget).mesh, budget);
+        install(phase1_mesh(budget).mesh, budget, true);
 }
 
 void Pipeline::finish_phase1(const WorkBudget& budget) {
@@ -197,7 +206,7 @@ void Pipeline::finish_phase1(const WorkBudget& budget) {
         return;
     }
     field_changing_ = false;
-    install(std::move(result.mesh), budget);
+    install(std::move(result.mesh), budget, true);
 }
 
 PolygonizeResult Pipeline::phase1_mesh(const WorkBudget& budget) {
@@ -231,13 +240,35 @@ Mesh Pipeline::fit_to_budget(Mesh mesh, const WorkBudget& budget) {
     return mesh;
 }
 
-void Pipeline::install(Mesh mesh, const WorkBudget& budget) {
+void Pipeline::install(Mesh mesh, const WorkBudget& budget, bool sliced) {
     if (budget.cancelled()) return;
     shadow_.reset();
     canonical_pending_ = false;
     installed_ = mesh;
-    Mesh root = fit_to_budget(std::move(mesh), budget);
-    if (budget.cancelled()) return;
+    std::vector<std::uint8_t> faces = box_faces(mesh, settings_.phase1.box);
+    const std::optional<std::size_t> limit = settings_.refine.constraint.triangle_limit();
+    simplifying_ = std::make_unique<Simplification>(std::move(mesh), std::move(faces),
+                                                    limit.value_or(SIZE_MAX));
+    // The first mesh must be there after the first step; a later one may take several.
+    continue_install(sliced && refiner_ ? budget : WorkBudget(budget.cancel_flag()));
+}
+
+bool Pipeline::continue_install(const WorkBudget& budget) {
+    if (!simplifying_->advance(budget)) {
+        if (budget.cancelled()) simplifying_.reset();
+        return false;
+    }
+    const SimplifyReport report = simplifying_->report();
+    Mesh root = simplifying_->take();
+    simplifying_.reset();
+    status_.budget_unreachable = !report.reached;
+    status_.minimum_triangles = report.reached ? 0 : report.triangles;
+    if (root.neighbours.empty()) build_adjacency(root);  // simplified: compacted
+    set_roots(std::move(root));
+    return true;
+}
+
+void Pipeline::set_roots(Mesh root) {
     if (!refiner_) {
         refiner_ = std::make_unique<Refiner>(field_, root, settings_.refine);
     } else {
@@ -250,6 +281,7 @@ void Pipeline::set_field(std::shared_ptr<const Field> field) {
     field_ = std::move(field);
     phase1_ = std::make_unique<Polygonizer>(field_, settings_.phase1);
     shadow_.reset();
+    simplifying_.reset();
     canonical_pending_ = false;
     classified_at_last_mesh_ = 0;
     status_.resolving = true;
@@ -269,7 +301,7 @@ void Pipeline::set_constraint(Constraint constraint) {
     // A budget below the phase-1 mesh's (simplified) triangles: simplify it again. (A higher one
     // is reached by refining from the roots as they are.)
     const std::optional<std::size_t> limit = settings_.refine.constraint.triangle_limit();
-    if (limit && installed_ && refiner_->root_topology().triangles > *limit) {
+    if (installed_ && (simplifying_ || (limit && refiner_->root_topology().triangles > *limit))) {
         install(*installed_, WorkBudget{});
         return;
     }
