@@ -291,22 +291,30 @@ class RefusedSocket extends FakeSocket {
   }
 }
 
-test('a server that stays down is tried one attempt at a time (error then close count once)', async () => {
+test('a server that stays down is tried one attempt at a time (error then close count once)', async (t) => {
   RefusedSocket.refusing = false;
   const client = await connect('ws://h/ws', { WebSocket: RefusedSocket, decoder: new FakeMeshDecoder(), reconnectDelaysMs: [2], maxReconnectAttempts: 1000 });
   const first = FakeSocket.last;
+  // Mocked timers: each 3 ms tick fires the pending attempt (2 ms ± 20 %), whose socket fails at
+  // once; one next attempt per failure gives one attempt per tick, two would double every tick.
+  t.mock.timers.enable({ apis: ['setTimeout'] });
+  const settle = () => new Promise((resolve) => setImmediate(resolve));
   RefusedSocket.refusing = true;
   RefusedSocket.opened = 0;
   first.onclose({ code: 1006, reason: '' });
-  await new Promise((resolve) => setTimeout(resolve, 60));
-  const attempts = RefusedSocket.opened;
-  // At 2 ms (±20 %) apart, 60 ms allow about 25 attempts in a row; doubling would make thousands.
-  assert.ok(attempts >= 3 && attempts <= 40, `${attempts} attempts in 60 ms`);
+  for (let tick = 1; tick <= 10; ++tick) {
+    t.mock.timers.tick(3);
+    await settle();
+    assert.equal(RefusedSocket.opened, tick, `one attempt per delay, not ${RefusedSocket.opened} after ${tick}`);
+  }
   RefusedSocket.refusing = false;
-  await until(() => client.connected);
+  t.mock.timers.tick(3);
+  await settle();
+  assert.ok(client.connected);
   assert.equal(client.reconnects, 1);
   const opened = RefusedSocket.opened;
-  await new Promise((resolve) => setTimeout(resolve, 20));
+  t.mock.timers.tick(100);
+  await settle();
   assert.equal(RefusedSocket.opened, opened, 'no attempt left running once connected');
   client.close();
 });
