@@ -8,12 +8,13 @@
 //      latency with one session: end to end (the frame's server timestamp, taken before encoding,
 //      to the client having decoded and applied it) and on the server (made to written).
 //
-//   (cd tests/server/node && npm ci) && node bench/server_bench.mjs [--threads N]
+//   (cd tests/server/node && npm ci) && node bench/server_bench.mjs [--threads N] [--parts 1,2,3]
 //
 // It starts build/bin/isomesh-server (or $ISOMESH_BIN_DIR's) itself.
 
 import { client, converged, startServer } from '../tests/server/node/harness.js';
 
+const parts = process.argv.includes('--parts') ? process.argv[process.argv.indexOf('--parts') + 1].split(',') : ['1', '2', '3'];
 const threads = process.argv.includes('--threads') ? process.argv[process.argv.indexOf('--threads') + 1] : '2';
 
 const SURFACES = [
@@ -23,6 +24,9 @@ const SURFACES = [
   { name: 'tanglecube', expression: 'x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8=0', box: [-3, 3, -3, 3, -3, 3] },
   { name: 'oblate spheroid (thesis)', expression: '10x^2+y^2+z^2=20', box: [-5, 5, -5, 5, -5, 5] },
   { name: 'genus 2', expression: '((x-1)^2+y^2-1)((x+1)^2+y^2-1)-0.3+z^2=0', box: [-3, 3, -3, 3, -3, 3] },
+  { name: 'gyroid', expression: 'sin(x)cos(y)+sin(y)cos(z)+sin(z)cos(x)=0', box: [-6, 6, -6, 6, -6, 6] },
+  { name: 'heart', expression: '(x^2+2.25y^2+z^2-1)^3-x^2z^3-0.1125y^2z^3=0', box: [-1.5, 1.5, -1.5, 1.5, -1.5, 1.5] },
+  { name: 'blobby cube (thesis)', expression: 'sqrt(x^2+y^2+z^2)+2cos(2x)+2cos(2y)+2cos(2z)=20', box: [-28, 28, -28, 28, -28, 28] },
 ];
 
 function percentile(values, p) {
@@ -46,7 +50,7 @@ async function firstKeyframe(server) {
       const session = await connection.create({
         expression: surface.expression,
         box: surface.box,
-        constraints: { triangles: 1 }, // phase 1 only: the first mesh is the whole stream
+        constraints: { triangles: 20000 }, // the default budget: the first keyframe is the first mesh
       });
       if (!session.mesh.synchronized) await session.once('keyframe');
       times.push(performance.now() - started);
@@ -149,9 +153,9 @@ async function frameLatency(server) {
 const server = await startServer(['--threads', threads, '--orphan-timeout', '1', '--max-sessions-per-connection', '64']);
 try {
   console.log(`isomesh-server on port ${server.port}, ${threads} worker threads`);
-  await firstKeyframe(server);
-  await bytesPerTriangle(server);
-  await frameLatency(server);
+  if (parts.includes('1')) await firstKeyframe(server);
+  if (parts.includes('2')) await bytesPerTriangle(server);
+  if (parts.includes('3')) await frameLatency(server);
 } finally {
   await server.stop();
 }

@@ -61,7 +61,7 @@ struct PipelineSettings {
     double first_mesh_share = 0.4;
     /// The first mesh is made of at most about this many octree cells (meshing costs a few
     /// microseconds a cell): the first step stops classifying there even if time is left.
-    std::size_t first_mesh_cells = 1024;
+    std::size_t first_mesh_cells = 512;
     /// Intermediate phase-1 meshes are made only while the octree has at most this many cells
     /// (beyond, meshing them costs more than it shows; the final mesh is always made).
     std::size_t max_intermediate_cells = 50'000;
