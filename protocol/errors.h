@@ -25,9 +25,12 @@ enum class ErrorCode {
     unavailable,          ///< the server is shutting down and accepts no new work
     internal,             ///< a bug in the server: report it
     bad_frame,            ///< a binary frame is malformed (used by frame decoders)
+    read_only,            ///< the request needs the control id; it named the view id
+    server_busy,          ///< the server is at its session or memory limit: try again later
+    resource_limit,       ///< the session used up its memory or CPU-time budget
 };
 
-inline constexpr int kErrorCodeCount = static_cast<int>(ErrorCode::bad_frame) + 1;
+inline constexpr int kErrorCodeCount = static_cast<int>(ErrorCode::resource_limit) + 1;
 
 /// The code's wire name, e.g. "bad_json".
 std::string_view to_string(ErrorCode code);

@@ -35,4 +35,7 @@ export const ERROR_CODES = Object.freeze([
   'unavailable',
   'internal',
   'bad_frame',
+  'read_only',
+  'server_busy',
+  'resource_limit',
 ]);
