@@ -1,6 +1,10 @@
 // isomesh-server: the mesh server. `isomesh-server --help` lists the options.
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
+
+#include <sys/resource.h>
 #include <exception>
 #include <string_view>
 #include <vector>
@@ -23,8 +27,11 @@ std::string browser_url(const ServerConfig& config, std::uint16_t port) {
     return "http://" + host + ":" + std::to_string(port) + "/";
 }
 
+void raise_file_limit(Logger& logger);
+
 int serve(const ServerConfig& config) {
     Logger logger(config.log_level);
+    raise_file_limit(logger);
     Metrics metrics;
     MeshService service(config, logger, metrics);
     net::HttpServer server(service, config, logger, metrics);
@@ -48,8 +55,27 @@ int serve(const ServerConfig& config) {
                               {"web_root", config.web_root},
                               {"worker_threads", resolved_worker_threads(config)}});
     server.run();
+    // The drain cancelled every session; a worker that does not check its cancel flag (a long
+    // phase 1) must not hold the exit past the drain's deadline.
+    const Clock::time_point deadline =
+        std::max(server.drain_deadline(), Clock::now() + std::chrono::milliseconds(100));
+    if (!service.wait_workers(deadline)) {
+        logger.warn("exit_with_busy_workers", {{"busy_workers", metrics.busy_workers.value()}});
+        std::fflush(nullptr);
+        std::_Exit(0);
+    }
     logger.info("stopped");
     return 0;
+}
+
+/// Raises the soft limit on open files to the hard one: every connection holds a descriptor.
+void raise_file_limit(Logger& logger) {
+    rlimit limit{};
+    if (getrlimit(RLIMIT_NOFILE, &limit) != 0 || limit.rlim_cur >= limit.rlim_max) return;
+    const rlim_t before = limit.rlim_cur;
+    limit.rlim_cur = limit.rlim_max;
+    if (setrlimit(RLIMIT_NOFILE, &limit) == 0)
+        logger.debug("file_limit_raised", {{"from", before}, {"to", limit.rlim_cur}});
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "polygonize/polygonizer.h"
+#include "server/resources.h"
 
 namespace isomesh::server {
 namespace {
@@ -32,9 +33,11 @@ std::string timeout_message(Clock::duration limit) {
 
 }  // namespace
 
-MeshSession::MeshSession(protocol::SessionId id, FunctionVersion first, SessionServices services,
+MeshSession::MeshSession(SessionIds ids, FunctionVersion first, SessionServices services,
                          EndHandler on_end)
-    : id_(id),
+    : id_(ids.control),
+      view_id_(ids.view),
+      serial_(ids.serial),
       services_(services),
       on_end_(std::move(on_end)),
       latest_(first),
@@ -52,51 +55,64 @@ MeshSession::~MeshSession() {
 
 // ---- requests ---------------------------------------------------------------------------------
 
-bool MeshSession::subscribe(const std::shared_ptr<Client>& client,
+bool MeshSession::subscribe(const std::shared_ptr<Client>& client, protocol::Access access,
                             const std::function<void()>& reply) {
     {
         std::lock_guard lock(mutex_);
-        if (finished_ || closing_) return false;
+        if (finished_) return false;
         if (reply) reply();
-        const bool known = std::any_of(subscribers_.begin(), subscribers_.end(),
-                                       [&](const auto& s) { return s.lock() == client; });
+        const bool known = std::any_of(
+            subscribers_.begin(), subscribers_.end(),
+            [&](const Subscriber& s) { return s.access == access && s.client.lock() == client; });
         if (!known) {
-            subscribers_.push_back(client);
+            subscribers_.push_back({client, access});
             services_.metrics.subscriptions.add(1);
         }
         orphaned_since_.reset();
-        keyframe_requests_.push_back({client, false});
+        keyframe_requests_.push_back({client, false, access});
     }
     schedule();
     return true;
 }
 
-void MeshSession::unsubscribe(const Client& client) {
+void MeshSession::unsubscribe(const Client& client, protocol::Access access) {
     std::lock_guard lock(mutex_);
-    auto gone = std::remove_if(subscribers_.begin(), subscribers_.end(), [&](const auto& s) {
-        auto subscriber = s.lock();
-        return !subscriber || subscriber.get() == &client;
+    auto gone = std::remove_if(subscribers_.begin(), subscribers_.end(), [&](const Subscriber& s) {
+        auto subscriber = s.client.lock();
+        return !subscriber || (subscriber.get() == &client && s.access == access);
     });
     services_.metrics.subscriptions.add(-static_cast<std::int64_t>(subscribers_.end() - gone));
     subscribers_.erase(gone, subscribers_.end());
     if (subscribers_.empty() && !orphaned_since_) orphaned_since_ = Clock::now();
 }
 
-void MeshSession::request_keyframe(const std::shared_ptr<Client>& client, bool catch_up) {
+void MeshSession::request_keyframe(const std::shared_ptr<Client>& client, protocol::Access access,
+                                   bool catch_up) {
     {
         std::lock_guard lock(mutex_);
         if (finished_) return;
-        keyframe_requests_.push_back({client, catch_up});
+        keyframe_requests_.push_back({client, catch_up, access});
     }
     schedule();
 }
 
 void MeshSession::update(const protocol::Update& request, const VersionLimits& limits,
+                         const Client& requester,
                          const std::function<void(const VersionResult&)>& reply) {
     std::lock_guard serial(update_mutex_);
-    VersionResult next = next_version(latest(), request, limits);
+    const FunctionVersion current = latest();
+    VersionResult next = next_version(current, request, limits);
+    if (next && changes_nothing(current, next.value())) {
+        reply(current);
+        return;
+    }
     reply(next);
     if (!next) return;
+    std::vector<LiveSubscriber> others = live_subscribers();
+    std::erase_if(others, [&](const LiveSubscriber& s) {
+        return s.client.get() == &requester && s.access == protocol::Access::control;
+    });
+    broadcast(others, protocol::Updated{std::nullopt, id_, next.value().state}, std::nullopt);
     {
         std::lock_guard lock(mutex_);
         latest_ = next.value();
@@ -115,13 +131,13 @@ void MeshSession::set_paused(bool paused) {
 }
 
 void MeshSession::close(protocol::Closed::Reason reason) {
-    {
-        std::lock_guard lock(mutex_);
-        if (finished_ || closing_) return;
-        closing_ = reason;
-        cancel_ = true;
-    }
-    schedule();
+    cancel_ = true;
+    end_subscriptions(reason);
+}
+
+std::uint64_t MeshSession::reservation() const {
+    std::lock_guard lock(mutex_);
+    return SessionMemory::projected(*latest_.state.constraints.triangles);
 }
 
 FunctionVersion MeshSession::latest() const {
@@ -131,8 +147,7 @@ FunctionVersion MeshSession::latest() const {
 
 std::size_t MeshSession::subscriber_count() const {
     std::lock_guard lock(mutex_);
-    return static_cast<std::size_t>(std::count_if(subscribers_.begin(), subscribers_.end(),
-                                                  [](const auto& s) { return !s.expired(); }));
+    return live_subscribers_locked().size();
 }
 
 void MeshSession::touch() {
@@ -160,7 +175,6 @@ MeshSession::Inbox MeshSession::take_inbox() {
     std::lock_guard lock(mutex_);
     Inbox inbox;
     inbox.finished = finished_;
-    inbox.closing = closing_;
     inbox.paused = paused_;
     if (!paused_ && pending_version_) {
         inbox.version = std::move(*pending_version_);
@@ -170,22 +184,68 @@ MeshSession::Inbox MeshSession::take_inbox() {
     }
     inbox.keyframes = std::move(keyframe_requests_);
     keyframe_requests_.clear();
-    for (const auto& weak : subscribers_) {
-        if (auto client = weak.lock()) inbox.subscribers.push_back(std::move(client));
-    }
+    inbox.subscribers = live_subscribers_locked();
     return inbox;
 }
 
 bool MeshSession::run_slice() {
+    const Clock::duration cpu_start = thread_cpu_time();
+    bool more = false;
+    {
+        // The session's CPU budget also bounds a single turn, e.g. a phase 1 that runs long.
+        const auto left = services_.settings.session_cpu - cpu_time();
+        auto guard =
+            services_.watchdog.arm(std::max(left, Clock::duration::zero()), cancel_, cpu_spent_);
+        more = turn();
+    }
+    return within_budgets(thread_cpu_time() - cpu_start) && more;
+}
+
+bool MeshSession::within_budgets(Clock::duration turn_cpu) {
+    cpu_time_ += turn_cpu.count();
+    services_.metrics.session_cpu_us.add(static_cast<std::uint64_t>(
+        std::chrono::duration_cast<std::chrono::microseconds>(turn_cpu).count()));
+    std::uint64_t queued = 0;
+    const std::vector<LiveSubscriber> subscribers = live_subscribers();
+    for (const LiveSubscriber& s : subscribers)
+        queued += s.client->queue().session_bytes(id_for(s.access));
+    memory_estimate_ = SessionMemory::estimate(wire_.triangle_count(), queued);
+    {
+        std::lock_guard lock(mutex_);
+        if (finished_) return false;
+    }
+    const auto mib = [](std::uint64_t bytes) { return std::to_string(bytes >> 20) + " MiB"; };
+    if (memory_estimate_ > services_.settings.session_memory_bytes) {
+        fail(ErrorCode::resource_limit,
+             "the session holds about " + mib(memory_estimate_) + ", more than its budget of " +
+                 mib(services_.settings.session_memory_bytes),
+             current_.request_id);
+        return false;
+    }
+    if (cpu_spent_ || cpu_time() >= services_.settings.session_cpu) {
+        const auto seconds = [](Clock::duration d) {
+            return std::to_string(std::chrono::duration_cast<std::chrono::seconds>(d).count());
+        };
+        fail(ErrorCode::resource_limit,
+             "the session used its CPU-time budget of " + seconds(services_.settings.session_cpu) +
+                 " s",
+             current_.request_id);
+        return false;
+    }
+    return true;
+}
+
+Watchdog::Guard MeshSession::arm_eval_limit() {
+    return services_.watchdog.arm(services_.settings.eval_timeout, cancel_, timed_out_);
+}
+
+bool MeshSession::turn() {
     const Clock::time_point start = Clock::now();
     Inbox inbox = take_inbox();
     if (inbox.finished) return false;
-    if (inbox.closing) {
-        finish(*inbox.closing);
-        return false;
-    }
     try {
         if (inbox.version) {
+            last_frame_converged_ = false;  // a new version's frames start unflagged
             const Start started = start_version(std::move(*inbox.version), inbox);
             if (started == Start::failed) return false;
             if (started == Start::superseded) return true;
@@ -220,8 +280,7 @@ MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& in
         if (version.field != current_.field) {
             {
                 // set_field runs phase 1 on the new function (to detect topology changes).
-                auto guard = services_.watchdog.arm(Clock::now() + services_.settings.eval_timeout,
-                                                    cancel_, timed_out_);
+                auto guard = arm_eval_limit();
                 refiner_->set_field(version.field);
             }
             if (timed_out_) {
@@ -255,8 +314,7 @@ MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) 
     phase1.cancel = &cancel_;
     PolygonizeResult first;
     {
-        auto guard = services_.watchdog.arm(Clock::now() + services_.settings.eval_timeout, cancel_,
-                                            timed_out_);
+        auto guard = arm_eval_limit();
         first = polygonize(*version.field, phase1);
     }
     if (first.stats.cancelled) {
@@ -284,13 +342,13 @@ MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) 
     ++sequence_;
 
     const Clock::time_point now = Clock::now();
-    auto frame = encode_keyframe(0, version.state.version);
-    for (const auto& client : inbox.subscribers) client->queue().push_keyframe(id_, frame, now);
+    auto frame = encode_keyframe(first_keyframe_flags(), version.state.version);
+    push_keyframes(inbox.subscribers, frame, now);
     inbox.keyframes.clear();  // every subscriber just got this one
     last_flush_ = now;
     first_mesh_ms_ = milliseconds_between(version.requested, now);
     services_.metrics.first_mesh_seconds.observe(seconds_between(version.requested, now));
-    services_.logger.debug("first_mesh", {{"session", id_.to_hex()},
+    services_.logger.debug("first_mesh", {{"session", serial_},
                                           {"version", version.state.version},
                                           {"triangles", wire_.triangle_count()},
                                           {"phase1_ms", first.stats.time_ms},
@@ -307,8 +365,7 @@ bool MeshSession::refine_turn(const Inbox& inbox) {
     StepResult step;
     {
         // A restart after a topology change runs phase 1 inside the step.
-        auto guard = services_.watchdog.arm(Clock::now() + services_.settings.eval_timeout, cancel_,
-                                            timed_out_);
+        auto guard = arm_eval_limit();
         step = refiner_->step(budget);
     }
     if (timed_out_) {
@@ -344,30 +401,67 @@ bool MeshSession::refine_turn(const Inbox& inbox) {
     return !converged_;
 }
 
+std::uint16_t MeshSession::first_keyframe_flags() {
+    StepBudget probe;
+    probe.operations = 1;
+    const StepResult step = refiner_->step(probe);
+    gather(pending_, step.delta);
+    pending_changes_ += step.delta.added_triangles.size() + step.delta.removed_triangles.size() +
+                        step.delta.added_vertices.size() + step.delta.moved_vertices.size() +
+                        step.delta.removed_vertices.size();
+    services_.metrics.splits.add(step.splits);
+    last_frame_converged_ = step.converged && !step.cancelled;
+    return last_frame_converged_ ? protocol::frame_flags::converged : 0;
+}
+
+const std::shared_ptr<const Bytes>& MeshSession::frame_for(protocol::Access access,
+                                                           FrameCopies& frame) const {
+    if (access == protocol::Access::control) return frame.control;
+    if (!frame.view)
+        frame.view =
+            std::make_shared<const Bytes>(protocol::with_session(*frame.control, view_id_));
+    return frame.view;
+}
+
+void MeshSession::push_keyframes(const std::vector<LiveSubscriber>& to,
+                                 const std::shared_ptr<const Bytes>& frame,
+                                 Clock::time_point created) {
+    FrameCopies copies{frame, nullptr};
+    for (const LiveSubscriber& s : to)
+        s.client->queue().push_keyframe(id_for(s.access), frame_for(s.access, copies), created);
+}
+
 void MeshSession::serve_keyframes(const std::vector<KeyframeRequest>& requests) {
-    std::shared_ptr<const Bytes> frames[2];  // without and with the catch_up flag
+    FrameCopies frames[2];  // without and with the catch_up flag
     const std::uint16_t converged = converged_ ? protocol::frame_flags::converged : 0;
     for (const KeyframeRequest& request : requests) {
         auto client = request.client.lock();
         if (!client) continue;
         auto& frame = frames[request.catch_up ? 1 : 0];
-        if (!frame) {
+        if (!frame.control) {
             const std::uint16_t flags =
                 converged | (request.catch_up ? protocol::frame_flags::catch_up : 0);
-            frame = encode_keyframe(flags, current_.state.version);
+            frame.control = encode_keyframe(flags, current_.state.version);
         }
-        if (client->queue().push_keyframe(id_, frame) && converged_message_)
-            client->send(*converged_message_);
+        const protocol::SessionId& id = id_for(request.access);
+        if (client->queue().push_keyframe(id, frame_for(request.access, frame)) &&
+            converged_message_)
+            broadcast({{client, request.access}}, *converged_message_,
+                      converged_message_->sequence);
     }
 }
 
 void MeshSession::flush(const Inbox& inbox, bool converged) {
     last_flush_ = Clock::now();
-    if (pending_changes_ == 0) return;
+    // A convergence found after the last frame went out is announced by an empty delta flagged
+    // converged, so that the frame a `converged` message names always carries the flag.
+    const bool announce = converged && !last_frame_converged_;
+    if (pending_changes_ == 0 && !announce) return;
     pending_changes_ = 0;
     const WireDelta content = wire_.apply(pending_.take());
-    if (content.empty()) return;
+    if (content.empty() && !announce) return;
     ++sequence_;
+    last_frame_converged_ = converged;
     protocol::FrameInfo info;
     info.kind = protocol::FrameKind::delta;
     info.flags = converged ? protocol::frame_flags::converged : 0;
@@ -384,11 +478,11 @@ void MeshSession::flush(const Inbox& inbox, bool converged) {
     services_.metrics.encode_seconds.observe(seconds_between(last_flush_, Clock::now()));
     if (!encoded) throw std::runtime_error("delta encoding failed: " + encoded.error().message);
     wire_.commit_wire_ids(content.refiner_ids, encoded.value().triangle_ids);
-    auto frame = std::make_shared<const Bytes>(std::move(encoded.value().bytes));
-    for (const auto& client : inbox.subscribers) {
-        if (client->queue().push_delta(id_, frame, last_flush_) ==
-            OutputQueue::DeltaOutcome::dropped_resync)
-            request_keyframe(client, true);
+    FrameCopies frame{std::make_shared<const Bytes>(std::move(encoded.value().bytes)), nullptr};
+    for (const LiveSubscriber& s : inbox.subscribers) {
+        if (s.client->queue().push_delta(id_for(s.access), frame_for(s.access, frame),
+                                         last_flush_) == OutputQueue::DeltaOutcome::dropped_resync)
+            request_keyframe(s.client, s.access, true);
     }
 }
 
@@ -428,7 +522,7 @@ void MeshSession::send_progress(const Inbox& inbox) {
     if (now - last_progress_ < services_.settings.progress_interval) return;
     auto progress = statistics<protocol::Progress>();
     progress.splits_per_second = splits_since_progress_ / seconds_between(last_progress_, now);
-    broadcast(inbox.subscribers, progress, true);
+    broadcast(inbox.subscribers, progress, progress.sequence, true);
     last_progress_ = now;
     splits_since_progress_ = 0;
 }
@@ -440,61 +534,87 @@ void MeshSession::send_converged(const Inbox& inbox) {
     message.merges = counters.merges - counters_at_version_.merges;
     message.first_mesh_ms = first_mesh_ms_;
     message.total_ms = milliseconds_between(current_.requested, Clock::now());
-    broadcast(inbox.subscribers, message);
+    broadcast(inbox.subscribers, message, message.sequence);
     converged_message_ = message;
-    services_.logger.debug("converged", {{"session", id_.to_hex()},
+    services_.logger.debug("converged", {{"session", serial_},
                                          {"version", message.version},
                                          {"triangles", message.triangles},
                                          {"total_ms", message.total_ms}});
 }
 
-void MeshSession::broadcast(const std::vector<std::shared_ptr<Client>>& to,
-                            const protocol::ServerMessage& message, bool droppable) {
-    if (to.empty()) return;
-    auto text = std::make_shared<const std::string>(protocol::serialize(message));
-    for (const auto& client : to) client->queue().push_text(text, droppable);
+template <class Message>
+void MeshSession::broadcast(const std::vector<LiveSubscriber>& to, Message message,
+                            std::optional<std::uint64_t> sequence, bool droppable) {
+    std::shared_ptr<const std::string> texts[2];  // naming the control id, the view id
+    for (const LiveSubscriber& s : to) {
+        auto& text = texts[s.access == protocol::Access::view ? 1 : 0];
+        if (!text) {
+            message.session = id_for(s.access);
+            if constexpr (requires { message.access; }) {  // created, updated, subscribed
+                message.access = s.access;
+                message.view = s.access == protocol::Access::control
+                                   ? std::optional<protocol::SessionId>(view_id_)
+                                   : std::nullopt;
+            }
+            text = std::make_shared<const std::string>(
+                protocol::serialize(protocol::ServerMessage(message)));
+        }
+        s.client->queue().push_session_text(id_for(s.access), text, sequence, droppable);
+    }
 }
 
 void MeshSession::fail(ErrorCode code, const std::string& message,
                        const std::optional<protocol::RequestId>& request_id) {
     services_.logger.warn(
         "session_failed",
-        {{"session", id_.to_hex()}, {"code", protocol::to_string(code)}, {"message", message}});
+        {{"session", serial_}, {"code", protocol::to_string(code)}, {"message", message}});
     services_.metrics.errors[static_cast<int>(code)].add();
     protocol::ErrorReply error;
     error.id = request_id;
     error.session = id_;
     error.code = code;
     error.message = message;
-    broadcast(live_subscribers(), error);
+    broadcast(live_subscribers(), error, std::nullopt);
     finish(protocol::Closed::Reason::error);
     if (on_end_) on_end_(id_);
 }
 
 void MeshSession::finish(protocol::Closed::Reason reason) {
-    std::vector<std::shared_ptr<Client>> subscribers = live_subscribers();
+    end_subscriptions(reason);
+    refiner_.reset();
+    wire_ = WireMesh();
+}
+
+bool MeshSession::end_subscriptions(protocol::Closed::Reason reason) {
+    std::vector<LiveSubscriber> subscribers;
     {
         std::lock_guard lock(mutex_);
+        if (finished_) return false;
         finished_ = true;
+        subscribers = live_subscribers_locked();
         services_.metrics.subscriptions.add(-static_cast<std::int64_t>(subscribers_.size()));
         subscribers_.clear();
         keyframe_requests_.clear();
         pending_version_.reset();
     }
-    for (const auto& client : subscribers) {
-        client->remove_subscription(id_);
-        client->queue().forget(id_, false);  // frames already queued still go out
-        client->send(protocol::Closed{id_, reason});
+    for (const LiveSubscriber& s : subscribers) {
+        const protocol::SessionId& id = id_for(s.access);
+        s.client->remove_subscription(id);
+        s.client->queue().forget(id, false);  // frames already queued still go out
+        s.client->send(protocol::Closed{id, reason});
     }
-    refiner_.reset();
-    wire_ = WireMesh();
+    return true;
 }
 
-std::vector<std::shared_ptr<Client>> MeshSession::live_subscribers() {
+std::vector<MeshSession::LiveSubscriber> MeshSession::live_subscribers() {
     std::lock_guard lock(mutex_);
-    std::vector<std::shared_ptr<Client>> out;
-    for (const auto& weak : subscribers_) {
-        if (auto client = weak.lock()) out.push_back(std::move(client));
+    return live_subscribers_locked();
+}
+
+std::vector<MeshSession::LiveSubscriber> MeshSession::live_subscribers_locked() const {
+    std::vector<LiveSubscriber> out;
+    for (const Subscriber& s : subscribers_) {
+        if (auto client = s.client.lock()) out.push_back({std::move(client), s.access});
     }
     return out;
 }
