@@ -138,7 +138,7 @@ std::vector<std::uint8_t> with_session(std::span<const std::uint8_t> frame,
 }
 
 std::uint64_t frame_sequence(std::span<const std::uint8_t> frame) {
-    return get<std::uint64_t>(frame, 24);
+    return frame.size() >= kFrameHeaderBytes ? get<std::uint64_t>(frame, 24) : 0;
 }
 
 Result<FrameHeader> read_frame_header(std::span<const std::uint8_t> in) {

@@ -80,7 +80,7 @@ void write_frame_header(const FrameHeader& header, std::span<std::uint8_t, kFram
 std::vector<std::uint8_t> with_session(std::span<const std::uint8_t> frame,
                                        const SessionId& session);
 
-/// The sequence number in a frame's header. Precondition: frame.size() >= kFrameHeaderBytes.
+/// The sequence number in a frame's header (0 for anything shorter than a header).
 std::uint64_t frame_sequence(std::span<const std::uint8_t> frame);
 
 /// Reads and validates a header: magic, version, kind, count limits, a keyframe removing nothing,

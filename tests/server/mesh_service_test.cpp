@@ -12,63 +12,19 @@
 
 #include "polygonize/polygonizer.h"
 #include "refine/refiner.h"
-#include "test_connection.h"
+#include "service_fixture.h"
 
 namespace isomesh::server {
 namespace {
 
 using protocol::ErrorCode;
+using testing::create;
+using testing::create_request;
+using testing::error_for;
+using testing::Fixture;
+using testing::test_config;
 using testing::TestConnection;
-
-ServerConfig test_config() {
-    ServerConfig config;
-    config.worker_threads = 2;
-    config.log_level = LogLevel::error;
-    config.max_sessions_per_connection = 3;
-    config.max_triangles = 100'000;
-    return config;
-}
-
-struct Fixture {
-    explicit Fixture(ServerConfig c = test_config())
-        : config(c), logger(c.log_level), service(config, logger, metrics) {}
-    ServerConfig config;
-    Logger logger;
-    Metrics metrics;
-    MeshService service;
-};
-
-protocol::Create create_request(std::string expression, std::uint64_t triangles,
-                                protocol::Parameters parameters = {}, std::int64_t id = 1) {
-    protocol::Create c;
-    c.id = id;
-    c.source.text = std::move(expression);
-    c.parameters = std::move(parameters);
-    c.box = {-3, 3, -3, 3, -3, 3};
-    c.constraints.triangles = triangles;
-    return c;
-}
-
-/// Creates a session and returns its id (failing the test when there is none).
-protocol::SessionId create(TestConnection& connection, const protocol::Create& request) {
-    connection.send(request);
-    EXPECT_TRUE(connection.wait_for([&] {
-        return connection.find<protocol::Created>(request.id) ||
-               connection.find<protocol::ErrorReply>(request.id);
-    }));
-    const auto* created = connection.find<protocol::Created>(request.id);
-    EXPECT_NE(created, nullptr);
-    return created ? created->session : protocol::SessionId{};
-}
-
-bool wait_converged(TestConnection& connection, const protocol::SessionId& session,
-                    std::uint32_t version = 1) {
-    return connection.wait_for([&] {
-        const auto* c = connection.converged(session, version);
-        return c && connection.replicas[session].synchronized() &&
-               connection.replicas[session].sequence() >= c->sequence;
-    });
-}
+using testing::wait_converged;
 
 /// The mesh the CLI would make: phase 1 and refinement to convergence, directly with the core.
 RefinedMesh reference_mesh(const protocol::Create& request) {
@@ -96,10 +52,6 @@ std::vector<std::array<std::uint32_t, 3>> canonical(const RefinedMesh& mesh) {
     }
     std::sort(out.begin(), out.end());
     return out;
-}
-
-const protocol::ErrorReply* error_for(const TestConnection& c, std::int64_t id) {
-    return c.find<protocol::ErrorReply>(protocol::RequestId{id});
 }
 
 class GallerySurface : public ::testing::TestWithParam<const char*> {};
@@ -145,7 +97,7 @@ TEST(MeshService, late_joiner_and_creator_end_identical) {
     Fixture f;
     TestConnection a(f.service), b(f.service);
     const auto session = create(a, create_request("x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8=0", 20000));
-    ASSERT_TRUE(a.wait_for([&] { return a.frames.size() >= 2; }));  // refinement under way
+    ASSERT_TRUE(a.wait_for([&] { return a.frames.size() >= 2; }));           // refinement under way
     const std::uint64_t sequence_before_joining = a.frames.back().sequence;  // 1 or more
     protocol::Subscribe subscribe;
     subscribe.id = 7;
