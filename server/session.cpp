@@ -235,6 +235,15 @@ bool MeshSession::within_budgets(Clock::duration turn_cpu) {
     return true;
 }
 
+void MeshSession::requeue_keyframes(std::vector<KeyframeRequest> requests) {
+    std::lock_guard lock(mutex_);
+    keyframe_requests_.insert(keyframe_requests_.begin(), requests.begin(), requests.end());
+}
+
+bool MeshSession::mid_change() const {
+    return refiner_ && refiner_->field_change_pending();
+}
+
 Watchdog::Guard MeshSession::arm_eval_limit() {
     return services_.watchdog.arm(services_.settings.eval_timeout, cancel_, timed_out_);
 }
@@ -248,12 +257,17 @@ bool MeshSession::turn() {
             last_frame_converged_ = false;  // a new version's frames start unflagged
             const Start started = start_version(std::move(*inbox.version), inbox);
             if (started == Start::failed) return false;
-            if (started == Start::superseded) return true;
+            if (started == Start::superseded) {
+                // Keyframes asked for are served by a later turn (a lost request would leave a
+                // subscriber waiting for a keyframe forever).
+                requeue_keyframes(std::move(inbox.keyframes));
+                return true;
+            }
         }
         if (!refiner_) return false;
         serve_keyframes(inbox.keyframes);
         if (inbox.paused || inbox.subscribers.empty() || converged_ || field_stale_) {
-            flush(inbox, converged_);
+            if (!mid_change()) flush(inbox, converged_);
             return false;
         }
         const bool more = refine_turn(inbox);
@@ -270,7 +284,9 @@ void MeshSession::observe_slice(Clock::time_point start) {
 }
 
 MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& inbox) {
-    flush(inbox, false);  // the old version's last changes, under its own version number
+    // The old version's last changes, under its own version number; those of a version still
+    // half applied (vertices partly moved) wait for the new version's first frame instead.
+    if (!mid_change()) flush(inbox, false);
     const bool restart_needed = !refiner_ || version.state.box != current_.state.box ||
                                 version.error_measure->name() != current_.error_measure->name();
     if (restart_needed) {
@@ -344,6 +360,7 @@ MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) 
     const Clock::time_point now = Clock::now();
     auto frame = encode_keyframe(first_keyframe_flags(), version.state.version);
     push_keyframes(inbox.subscribers, frame, now);
+    wire_version_ = version.state.version;
     inbox.keyframes.clear();  // every subscriber just got this one
     last_flush_ = now;
     first_mesh_ms_ = milliseconds_between(version.requested, now);
@@ -433,7 +450,9 @@ void MeshSession::push_keyframes(const std::vector<LiveSubscriber>& to,
 
 void MeshSession::serve_keyframes(const std::vector<KeyframeRequest>& requests) {
     FrameCopies frames[2];  // without and with the catch_up flag
-    const std::uint16_t converged = converged_ ? protocol::frame_flags::converged : 0;
+    const std::uint16_t converged =
+        converged_ && wire_version_ == current_.state.version ? protocol::frame_flags::converged
+                                                              : 0;
     for (const KeyframeRequest& request : requests) {
         auto client = request.client.lock();
         if (!client) continue;
@@ -441,7 +460,9 @@ void MeshSession::serve_keyframes(const std::vector<KeyframeRequest>& requests) 
         if (!frame.control) {
             const std::uint16_t flags =
                 converged | (request.catch_up ? protocol::frame_flags::catch_up : 0);
-            frame.control = encode_keyframe(flags, current_.state.version);
+            // The mirror's content: during a change of function, the version whose frames went
+            // out last (the new version's first delta then moves the vertices).
+            frame.control = encode_keyframe(flags, wire_version_);
         }
         const protocol::SessionId& id = id_for(request.access);
         if (client->queue().push_keyframe(id, frame_for(request.access, frame)) &&
@@ -469,6 +490,7 @@ void MeshSession::flush(const Inbox& inbox, bool converged) {
     info.sequence = sequence_;
     info.timestamp_us = unix_time_us();
     info.function_version = current_.state.version;
+    wire_version_ = current_.state.version;
     protocol::DeltaContent frame_content;
     frame_content.removed = content.removed;
     frame_content.vertices = content.vertices;

@@ -171,6 +171,10 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     bool turn();
     /// After a turn: charges its CPU time and estimates the memory; false when a budget is spent.
     bool within_budgets(Clock::duration turn_cpu);
+    void requeue_keyframes(std::vector<KeyframeRequest> requests);
+    /// True while a new function is half applied (vertices partly moved): no frame may go out,
+    /// since it would mix two surfaces.
+    bool mid_change() const;
     /// The watchdog alarm for a phase 1 (the version's CPU-time limit).
     Watchdog::Guard arm_eval_limit();
     const std::shared_ptr<const Bytes>& frame_for(protocol::Access access,
@@ -249,6 +253,7 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     std::optional<protocol::Converged> converged_message_;  // for late joiners
     std::size_t splits_since_progress_ = 0;
     bool last_frame_converged_ = false;  // the last frame sent carries the converged flag
+    std::uint32_t wire_version_ = 0;     // the function version of wire_'s content
 };
 
 }  // namespace isomesh::server
