@@ -44,16 +44,18 @@ export async function until(predicate, { timeoutMs = 20000, everyMs = 10, what =
 
 /**
  * Starts isomesh-server with `args` added to the test defaults. Resolves with a handle:
- * {port, pid, wsUrl, httpUrl, log, stop(), metrics(), status()}.
+ * {port, pid, wsUrl, httpUrl, log, stop(), metrics(), status()}. `prefix`: a command the server
+ * runs under (e.g. ['prlimit', '--nofile=64'] or ['taskset', '-c', '0']); `env`: variables added.
  */
-export function startServer(args = [], { timeoutMs = 20000 } = {}) {
+export function startServer(args = [], { timeoutMs = 20000, prefix = [], env = {} } = {}) {
   const defaults = ['--bind', '127.0.0.1', '--port', '0', '--threads', '2', '--web-root', ''];
   const fullArgs = [];
   for (let i = 0; i < defaults.length; i += 2) {
     if (!args.includes(defaults[i])) fullArgs.push(defaults[i], defaults[i + 1]);
   }
   fullArgs.push(...args);
-  const child = spawn(join(BIN_DIR, 'isomesh-server'), fullArgs, { stdio: ['ignore', 'ignore', 'pipe'] });
+  const command = [...prefix, join(BIN_DIR, 'isomesh-server'), ...fullArgs];
+  const child = spawn(command[0], command.slice(1), { stdio: ['ignore', 'ignore', 'pipe'], env: { ...process.env, ...env } });
   const log = [];
   const exited = new Promise((resolve) => child.once('exit', (code, signal) => resolve({ code, signal })));
   return new Promise((resolve, reject) => {

@@ -253,13 +253,20 @@ describe('bad input', () => {
       }
       assert.equal((await raw.reply(4)).column, 11); // the '=' inside the bracket
 
-      // Too large to be parsed at all: the reply cannot echo the id.
+      // Too large, or nested too deeply, to be parsed: the reply still echoes the id.
       raw.send({ v: 1, type: 'ping', id: 5, pad: 'x'.repeat(5000) });
-      await until(() => raw.messages.some((m) => m.type === 'error' && m.code === 'too_large'));
+      assert.equal((await raw.reply(5)).code, 'too_large');
+      raw.send(`{"v":1,"type":"ping","id":13,"x":${'['.repeat(40)}${']'.repeat(40)}}`);
+      assert.equal((await raw.reply(13)).code, 'bad_json');
+      // Names the function does not use are typos, not silently dropped.
+      create(14, { expression: 'x^2+y^2+z^2=4', parameters: { b: 1 } });
+      const typo = await raw.reply(14);
+      assert.equal(typo.code, 'bad_field');
+      assert.match(typo.message, /'b'/);
 
       raw.send('{not json');
       raw.socket.send(Buffer.from([1, 2, 3]), { binary: true }); // clients send no binary messages
-      await until(() => raw.messages.filter((m) => m.type === 'error' && m.code === 'bad_json').length === 2);
+      await until(() => raw.messages.filter((m) => m.type === 'error' && m.code === 'bad_json' && m.id === undefined).length === 2);
 
       create(10, { expression: 'x^2+y^2+z^2=1', constraints: { triangles: 100 } });
       assert.equal((await raw.reply(10)).type, 'created');
