@@ -450,9 +450,9 @@ void MeshSession::push_keyframes(const std::vector<LiveSubscriber>& to,
 
 void MeshSession::serve_keyframes(const std::vector<KeyframeRequest>& requests) {
     FrameCopies frames[2];  // without and with the catch_up flag
-    const std::uint16_t converged =
-        converged_ && wire_version_ == current_.state.version ? protocol::frame_flags::converged
-                                                              : 0;
+    const std::uint16_t converged = converged_ && wire_version_ == current_.state.version
+                                        ? protocol::frame_flags::converged
+                                        : 0;
     for (const KeyframeRequest& request : requests) {
         auto client = request.client.lock();
         if (!client) continue;
