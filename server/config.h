@@ -51,8 +51,9 @@ struct ServerConfig {
     /// Memory (MiB) the sessions may reserve and the process may hold before new sessions are
     /// refused (server_busy); 0: half the physical memory.
     std::uint64_t max_memory_mb = 0;
-    std::uint64_t session_memory_mb = 1024;   ///< one session's memory budget (MiB)
-    double session_cpu_s = 3600;              ///< one session's CPU-time budget over its life
+    std::uint64_t session_memory_mb =
+        1280;                     ///< one session's memory budget (MiB): 2,000,000 triangles
+    double session_cpu_s = 3600;  ///< one session's CPU-time budget over its life
     std::uint64_t max_triangles = 2'000'000;  ///< budgets above this get budget_too_large
     std::uint64_t default_triangles = 20'000;
     double default_max_error = 0.0;  ///< 0: refine to the triangle budget

@@ -115,6 +115,12 @@ MeshService::MeshService(const ServerConfig& config, Logger& logger, Metrics& me
       max_memory_bytes_(resolved_max_memory_bytes(config)),
       housekeeper_([this] { housekeeping(); }) {
     metrics_.sessions_limit.set(static_cast<std::int64_t>(config_.max_sessions));
+    metrics_.sessions_per_connection_limit.set(
+        static_cast<std::int64_t>(config_.max_sessions_per_connection));
+    metrics_.session_memory_limit_bytes.set(
+        static_cast<std::int64_t>(config_.session_memory_mb << 20));
+    metrics_.session_cpu_limit_seconds.set(static_cast<std::int64_t>(config_.session_cpu_s));
+    metrics_.http_connections_limit.set(static_cast<std::int64_t>(config_.max_http_connections));
     metrics_.memory_limit_bytes.set(static_cast<std::int64_t>(max_memory_bytes_));
 }
 

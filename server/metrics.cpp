@@ -85,6 +85,15 @@ std::string Metrics::render() const {
     gauge("splits_per_second", "Splits over the last second, all sessions.", splits_per_second);
     gauge("http_connections", "Open plain HTTP connections.", http_connections);
     gauge("sessions_limit", "Live sessions allowed (--max-sessions).", sessions_limit);
+    gauge("sessions_per_connection_limit",
+          "Live sessions one connection may have created (--max-sessions-per-connection).",
+          sessions_per_connection_limit);
+    gauge("session_memory_limit_bytes", "Memory one session may hold (--session-memory-mb).",
+          session_memory_limit_bytes);
+    gauge("session_cpu_limit_seconds", "CPU time one session may use (--session-cpu-s).",
+          session_cpu_limit_seconds);
+    gauge("http_connections_limit", "Plain HTTP connections (--max-http-connections).",
+          http_connections_limit);
     gauge("memory_limit_bytes", "Memory limit for admitting sessions (--max-memory-mb).",
           memory_limit_bytes);
     gauge("memory_reserved_bytes", "Memory the sessions' triangle budgets reserve.",

@@ -58,11 +58,15 @@ struct Metrics {
     Gauge run_queue;     ///< sessions waiting for a worker
     Gauge busy_workers;  ///< workers running a session slice
     Gauge worker_threads;
-    Gauge splits_per_second;      ///< over the last second, all sessions
-    Gauge http_connections;       ///< plain HTTP connections (not upgraded)
-    Gauge sessions_limit;         ///< --max-sessions
-    Gauge memory_limit_bytes;     ///< --max-memory-mb, resolved
-    Gauge memory_reserved_bytes;  ///< the sessions' reservations (triangle budgets)
+    Gauge splits_per_second;              ///< over the last second, all sessions
+    Gauge http_connections;               ///< plain HTTP connections (not upgraded)
+    Gauge sessions_limit;                 ///< --max-sessions
+    Gauge sessions_per_connection_limit;  ///< --max-sessions-per-connection
+    Gauge session_memory_limit_bytes;     ///< --session-memory-mb
+    Gauge session_cpu_limit_seconds;      ///< --session-cpu-s
+    Gauge http_connections_limit;         ///< --max-http-connections
+    Gauge memory_limit_bytes;             ///< --max-memory-mb, resolved
+    Gauge memory_reserved_bytes;          ///< the sessions' reservations (triangle budgets)
     Gauge memory_estimate_bytes;  ///< what the sessions hold, estimated (server/resources.h)
     Gauge resident_bytes;         ///< the process's resident set
 

@@ -54,7 +54,7 @@ struct SessionSettings {
     std::size_t batch_triangles = 2000;  ///< changes (triangles, vertices) that trigger a delta
     Clock::duration eval_timeout = std::chrono::seconds(10);  ///< CPU time of one phase 1
     Clock::duration session_cpu = std::chrono::hours(1);      ///< CPU time over the session's life
-    std::uint64_t session_memory_bytes = std::uint64_t{1} << 30;
+    std::uint64_t session_memory_bytes = std::uint64_t{1280} << 20;
     Clock::duration progress_interval = std::chrono::milliseconds(250);
     int position_bits = 14;
     /// Draco's encoder speed, 0 (smallest frames) to 10 (fastest); clients do not depend on it.
