@@ -41,13 +41,16 @@ std::optional<ErrorReply> compile(FunctionVersion& version, const VersionLimits&
     return std::nullopt;
 }
 
-/// A name in `supplied` (this request's parameters) that the function does not use: a typo, or a
-/// slider meant for another function, answered with bad_field rather than ignored.
+/// A name in `supplied` (this request's parameters) that the function does not use and the
+/// session never had (`had`: the values of its earlier versions; a slider may outlive the term
+/// that used it): a typo, answered with bad_field rather than ignored.
 std::optional<ErrorReply> check_names(const FunctionVersion& version,
-                                      const protocol::Parameters& supplied) {
+                                      const protocol::Parameters& supplied,
+                                      const protocol::Parameters& had = {}) {
     const auto& known = version.tape->params;
     for (const auto& [name, value] : supplied) {
         if (std::find(known.begin(), known.end(), name) != known.end()) continue;
+        if (had.contains(name)) continue;
         std::string list;
         for (const std::string& p : known) list += (list.empty() ? "'" : ", '") + p + "'";
         return reject(version.request_id, ErrorCode::bad_field,
@@ -156,7 +159,7 @@ VersionResult next_version(const FunctionVersion& current, const protocol::Updat
         }
     }
     if (request.parameters) {
-        if (auto error = check_names(version, *request.parameters)) return *error;
+        if (auto error = check_names(version, *request.parameters, current.values)) return *error;
     }
     if (request.source || request.parameters) {
         if (auto error = bind(version)) return *error;

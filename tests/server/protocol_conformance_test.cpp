@@ -125,14 +125,22 @@ TEST(MeshService, unknown_parameter_names_are_refused_with_bad_field) {
     ASSERT_NE(error_for(a, 4), nullptr);
     EXPECT_EQ(error_for(a, 4)->code, ErrorCode::bad_field);
     EXPECT_EQ(f.service.find(session)->latest().state.version, 1u);
-    // A new expression with its own parameters: the old values may stay unused.
+    // A new expression with its own parameters, and a slider of the old one: kept, unused.
     protocol::Update rewrite;
     rewrite.id = 5;
     rewrite.session = session;
     rewrite.source = protocol::Source{protocol::Source::Kind::expression, "x^2+y^2+z^2=r^2"};
-    rewrite.parameters = protocol::Parameters{{"r", 2.0}};
+    rewrite.parameters = protocol::Parameters{{"r", 2.0}, {"a", 4.5}};
     ASSERT_TRUE(request(a, rewrite, 5));
     ASSERT_NE(a.find<protocol::Updated>(protocol::RequestId{5}), nullptr);
+    EXPECT_EQ(a.find<protocol::Updated>(protocol::RequestId{5})->state.parameters,
+              (protocol::Parameters{{"r", 2.0}}));
+    protocol::Update stray = rewrite;
+    stray.id = 6;
+    stray.parameters = protocol::Parameters{{"q", 1.0}};  // never had one
+    ASSERT_TRUE(request(a, stray, 6));
+    ASSERT_NE(error_for(a, 6), nullptr);
+    EXPECT_EQ(error_for(a, 6)->code, ErrorCode::bad_field);
 }
 
 TEST(MeshService, errors_about_unread_messages_echo_the_request_id) {
