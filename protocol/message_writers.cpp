@@ -124,17 +124,22 @@ ordered_json statistics_json(MessageType type, const Statistics& m) {
     out["triangles"] = m.triangles;
     out["error_max"] = m.error_max;
     out["error_total"] = m.error_total;
+    out["certified"] = m.certified;
+    out["unresolved_cells"] = m.unresolved_cells;
     return out;
 }
 
 ordered_json write(const Progress& m) {
     ordered_json out = statistics_json(MessageType::progress, m);
     out["splits_per_second"] = m.splits_per_second;
+    out["resolving"] = m.resolving;
     return out;
 }
 
 ordered_json write(const Converged& m) {
     ordered_json out = statistics_json(MessageType::converged, m);
+    out["outcome"] = to_string(m.outcome);
+    out["budget_unreachable"] = m.budget_unreachable;
     out["splits"] = m.splits;
     out["merges"] = m.merges;
     out["first_mesh_ms"] = m.first_mesh_ms;

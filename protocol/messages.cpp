@@ -32,6 +32,8 @@ constexpr std::array<std::string_view, 18> kMessageTypeNames = {
 
 constexpr std::array<std::string_view, 4> kCloseReasonNames = {"closed", "expired", "shutdown",
                                                                "error"};
+constexpr std::array<std::string_view, 3> kOutcomeNames = {"surface", "no_surface",
+                                                           "region_not_surface"};
 
 constexpr std::array<std::string_view, 2> kAccessNames = {"control", "view"};
 
@@ -101,6 +103,16 @@ class FieldReader {
         const json* value = find(key);
         if (!value && ok()) fail(ErrorCode::bad_field, "missing field " + path(key));
         return value;
+    }
+
+    std::optional<bool> boolean(std::string_view key) {
+        const json* value = find(key);
+        if (!value) return std::nullopt;
+        if (!value->is_boolean()) {
+            fail_field(key, "must be true or false");
+            return std::nullopt;
+        }
+        return value->get<bool>();
     }
 
     std::optional<std::string> string(std::string_view key, bool required, std::size_t max_bytes,
@@ -476,18 +488,28 @@ void read_statistics(FieldReader& in, Statistics& m) {
     m.triangles = read_count(in, "triangles");
     m.error_max = read_double(in, "error_max");
     m.error_total = read_double(in, "error_total");
+    // Added within version 1 (PROTOCOL.md 9): absent from older servers' messages.
+    m.certified = in.boolean("certified").value_or(false);
+    m.unresolved_cells =
+        in.unsigned_integer("unresolved_cells", false, 0, kMaxSafeInteger).value_or(0);
 }
 
 ServerMessage read_progress(FieldReader& in) {
     Progress m;
     read_statistics(in, m);
     m.splits_per_second = read_double(in, "splits_per_second");
+    m.resolving = in.boolean("resolving").value_or(false);
     return m;
 }
 
 ServerMessage read_converged(FieldReader& in) {
     Converged m;
     read_statistics(in, m);
+    m.budget_unreachable = in.boolean("budget_unreachable").value_or(false);
+    if (const auto outcome = in.string("outcome", false, 32)) {
+        // Unknown outcomes (a newer server) read as a surface.
+        m.outcome = enum_from_name<Outcome>(kOutcomeNames, *outcome).value_or(Outcome::surface);
+    }
     m.splits = read_count(in, "splits");
     m.merges = read_count(in, "merges");
     m.first_mesh_ms = read_double(in, "first_mesh_ms");
@@ -628,6 +650,10 @@ std::string_view to_string(Closed::Reason reason) {
 
 std::string_view to_string(Access access) {
     return kAccessNames[static_cast<std::size_t>(access)];
+}
+
+std::string_view to_string(Outcome outcome) {
+    return kOutcomeNames[static_cast<std::size_t>(outcome)];
 }
 
 std::optional<MessageType> message_type_from_string(std::string_view name) {

@@ -206,8 +206,17 @@ struct Progress {
     double error_max = 0;
     double error_total = 0;
     double splits_per_second = 0;
+    /// Phase 1 is done and proved the topology in every cell (PROTOCOL.md 3.4).
+    bool certified = false;
+    /// Octree cells meshed without that proof (not yet classified, or unproven).
+    std::uint64_t unresolved_cells = 0;
+    /// Phase 1 still classifies cells: a keyframe may replace the mesh.
+    bool resolving = false;
     friend bool operator==(const Progress&, const Progress&) = default;
 };
+
+/// What a function version's mesh is (PROTOCOL.md 3.4).
+enum class Outcome { surface, no_surface, region_not_surface };
 
 /// The constraints are met for `version`: the mesh after frame `sequence` is final.
 struct Converged {
@@ -221,6 +230,12 @@ struct Converged {
     std::uint64_t merges = 0;
     double first_mesh_ms = 0;  ///< from the version's start to its first mesh (phase 1)
     double total_ms = 0;       ///< from the version's start to convergence
+    bool certified = false;
+    std::uint64_t unresolved_cells = 0;
+    Outcome outcome = Outcome::surface;
+    /// The triangle budget is below what the surface's topology needs: `triangles` is the fewest
+    /// the server reached.
+    bool budget_unreachable = false;
     friend bool operator==(const Converged&, const Converged&) = default;
 };
 
@@ -243,6 +258,7 @@ struct Closed {
 
 /// The reason's name on the wire ("closed", "expired", "shutdown", "error").
 std::string_view to_string(Closed::Reason reason);
+std::string_view to_string(Outcome outcome);
 
 using ServerMessage =
     std::variant<Created, Updated, Subscribed, Ack, Pong, Progress, Converged, ErrorReply, Closed>;

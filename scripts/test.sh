@@ -19,5 +19,6 @@ bash scripts/fuzz.sh
 # The client library (clients/js: varints, frames, slot table, sessions, frames of the C++
 # encoder) and the viewer's pure modules (clients/web/test).
 node --test clients/js/test/ clients/web/test/
-# The viewer in Debian's chromium, served by a real isomesh-server on a free loopback port.
+# The viewer and its <isomesh-surface> element in Debian's chromium, served by a real isomesh-server on
+# a free loopback port (tests/web: viewer, layout, embed, streaming; screenshots in build/test-artifacts/web).
 node --test tests/web/

@@ -168,8 +168,9 @@ const std::vector<Option>& options() {
         real_option("default-max-error", "error bound of a session that names none (0: none)",
                     &ServerConfig::default_max_error, 0, 1e300),
         integer_option("eval-timeout-ms",
-                       "CPU time (of the session's own turns, not wall clock) phase 1 of one "
-                       "function version may take (beyond: eval_timeout)",
+                       "CPU time (of the session's own work, not wall clock) for which phase 1 of "
+                       "a function version examines cells before keeping the mesh it has; a "
+                       "single step running this long ends the session with eval_timeout",
                        &ServerConfig::eval_timeout_ms, 1, kU32),
         integer_option("queue-bytes",
                        "output bytes queued per connection before deltas are dropped",

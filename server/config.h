@@ -57,7 +57,8 @@ struct ServerConfig {
     std::uint64_t max_triangles = 2'000'000;  ///< budgets above this get budget_too_large
     std::uint64_t default_triangles = 20'000;
     double default_max_error = 0.0;  ///< 0: refine to the triangle budget
-    /// CPU time phase 1 of one function version may take (the session's own thread's CPU time).
+    /// CPU time (the session's own thread's) for which phase 1 of a version examines cells; a
+    /// single step running this long fails the session (eval_timeout).
     std::uint32_t eval_timeout_ms = 10'000;
     std::size_t queue_bytes = 4 << 20;  ///< per-connection output budget (backpressure)
     double idle_timeout_s = 3600;       ///< a session without requests for this long expires

@@ -5,7 +5,6 @@
 #include <stdexcept>
 #include <utility>
 
-#include "polygonize/polygonizer.h"
 #include "server/resources.h"
 
 namespace isomesh::server {
@@ -241,7 +240,7 @@ void MeshSession::requeue_keyframes(std::vector<KeyframeRequest> requests) {
 }
 
 bool MeshSession::mid_change() const {
-    return refiner_ && refiner_->field_change_pending();
+    return pipeline_ && pipeline_->field_change_pending();
 }
 
 Watchdog::Guard MeshSession::arm_eval_limit() {
@@ -264,9 +263,9 @@ bool MeshSession::turn() {
                 return true;
             }
         }
-        if (!refiner_) return false;
+        if (!pipeline_) return false;
         serve_keyframes(inbox.keyframes);
-        if (inbox.paused || inbox.subscribers.empty() || converged_ || field_stale_) {
+        if (inbox.paused || inbox.subscribers.empty() || converged_) {
             if (!mid_change()) flush(inbox, converged_);
             return false;
         }
@@ -287,121 +286,128 @@ MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& in
     // The old version's last changes, under its own version number; those of a version still
     // half applied (vertices partly moved) wait for the new version's first frame instead.
     if (!mid_change()) flush(inbox, false);
-    const bool restart_needed = !refiner_ || version.state.box != current_.state.box ||
+    const bool restart_needed = !pipeline_ || version.state.box != current_.state.box ||
                                 version.error_measure->name() != current_.error_measure->name();
     if (restart_needed) {
         const Start started = restart(version, inbox);
         if (started != Start::started) return started;
     } else {
-        if (version.field != current_.field) {
-            {
-                // set_field runs phase 1 on the new function (to detect topology changes).
-                auto guard = arm_eval_limit();
-                refiner_->set_field(version.field);
-            }
-            if (timed_out_) {
-                fail(ErrorCode::eval_timeout, timeout_message(services_.settings.eval_timeout),
-                     version.request_id);
-                return Start::failed;
-            }
-            // A cancelled phase 1 leaves the refiner waiting for a restart from an empty mesh:
-            // nothing may be stepped until the version that cancelled it is set.
-            field_stale_ = cancel_;
-            if (field_stale_) return Start::superseded;
-        }
-        refiner_->set_constraint(version.constraint);
+        // The vertices move onto the new surface in the next steps, while phase 1 runs again for
+        // the new function (progressive/pipeline.h): nothing long happens here.
+        if (version.field != current_.field) pipeline_->set_field(version.field);
+        pipeline_->set_constraint(version.constraint);
         version_frame_due_ = true;
         first_mesh_ms_ = 0;
     }
     current_ = std::move(version);
     converged_ = false;
     converged_message_.reset();
-    counters_at_version_ = refiner_->counters();
+    counters_at_version_ = pipeline_->counters();
+    phase1_time_ = {};
     last_progress_ = Clock::now();
     splits_since_progress_ = 0;
     return Start::started;
 }
 
 MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) {
-    PolygonizeSettings phase1;
-    phase1.box = version.box;
-    phase1.min_depth = services_.settings.phase1_min_depth;
-    phase1.threads = 1;  // sessions run in parallel on the pool; the output is the same
-    phase1.cancel = &cancel_;
-    PolygonizeResult first;
+    PipelineSettings settings;
+    settings.phase1.box = version.box;
+    settings.phase1.min_depth = services_.settings.phase1_min_depth;
+    settings.phase1.threads = 1;  // sessions run in parallel on the pool; the output is the same
+    settings.refine.error_measure = version.error_measure;
+    settings.refine.constraint = version.constraint;
+    auto pipeline = std::make_unique<Pipeline>(version.field, std::move(settings));
+    const auto budget_us =
+        std::chrono::duration_cast<std::chrono::microseconds>(services_.settings.first_mesh_budget)
+            .count();
+    PipelineStep first;
     {
+        // The step stops at its budget; the watchdog only catches a runaway evaluation.
         auto guard = arm_eval_limit();
-        first = polygonize(*version.field, phase1);
+        first = pipeline->step(WorkBudget(budget_us, WorkBudget::thread_cpu_clock(), &cancel_));
     }
-    if (first.stats.cancelled) {
+    if (!pipeline->started()) {
         if (!timed_out_) return Start::superseded;
         fail(ErrorCode::eval_timeout, timeout_message(services_.settings.eval_timeout),
              version.request_id);
         return Start::failed;
     }
-
-    RefineSettings settings;
-    settings.error_measure = version.error_measure;
-    settings.constraint = version.constraint;
-    settings.cancel = &cancel_;
-    settings.phase1 = [phase1](const Field& field) { return polygonize(field, phase1).mesh; };
-    refiner_ = std::make_unique<Refiner>(version.field, first.mesh, std::move(settings));
-    field_stale_ = false;
-
+    pipeline_ = std::move(pipeline);
     encoding_.grid =
         protocol::QuantizationGrid::for_box(version.state.box, services_.settings.position_bits);
     encoding_.encoding_speed = services_.settings.encoding_speed;
-    const RefinedMesh mesh = refiner_->mesh();
-    wire_.reset(mesh.mesh, mesh.triangle_ids, mesh.vertex_ids);
-    pending_.take();
-    pending_changes_ = 0;
-    ++sequence_;
-
+    converged_ = first.converged;
+    replace_mesh(inbox, version.state.version, first.converged);
     const Clock::time_point now = Clock::now();
-    auto frame = encode_keyframe(first_keyframe_flags(), version.state.version);
-    push_keyframes(inbox.subscribers, frame, now);
-    wire_version_ = version.state.version;
-    inbox.keyframes.clear();  // every subscriber just got this one
-    last_flush_ = now;
     first_mesh_ms_ = milliseconds_between(version.requested, now);
     services_.metrics.first_mesh_seconds.observe(seconds_between(version.requested, now));
     services_.logger.debug("first_mesh", {{"session", serial_},
                                           {"version", version.state.version},
                                           {"triangles", wire_.triangle_count()},
-                                          {"phase1_ms", first.stats.time_ms},
                                           {"latency_ms", first_mesh_ms_},
-                                          {"frame_bytes", frame->size()}});
+                                          {"resolving", pipeline_->status().resolving}});
     return Start::started;
 }
 
-bool MeshSession::refine_turn(const Inbox& inbox) {
-    StepBudget budget;
-    budget.operations = std::numeric_limits<std::size_t>::max();
-    budget.microseconds =
+void MeshSession::replace_mesh(Inbox& inbox, std::uint32_t version, bool converged) {
+    const RefinedMesh mesh = pipeline_->mesh();
+    wire_.reset(mesh.mesh, mesh.triangle_ids, mesh.vertex_ids);
+    pending_.take();
+    pending_changes_ = 0;
+    ++sequence_;
+    const Clock::time_point now = Clock::now();
+    auto frame = encode_keyframe(converged ? protocol::frame_flags::converged : 0, version);
+    push_keyframes(inbox.subscribers, frame, now);
+    wire_version_ = version;
+    last_frame_converged_ = converged;
+    inbox.keyframes.clear();  // every subscriber just got this one
+    last_flush_ = now;
+}
+
+void MeshSession::limit_phase1(Clock::duration spent) {
+    if (!pipeline_->status().resolving) return;
+    phase1_time_ += spent;
+    if (phase1_time_ < services_.settings.eval_timeout) return;
+    // Slow to resolve, not broken: the mesh shown so far stays, its unresolved cells reported.
+    pipeline_->settle();
+    services_.logger.info("phase1_limited",
+                          {{"version", current_.state.version},
+                           {"unresolved_cells", pipeline_->status().unresolved_cells}});
+}
+
+bool MeshSession::refine_turn(Inbox& inbox) {
+    const auto slice_us =
         std::chrono::duration_cast<std::chrono::microseconds>(services_.settings.slice).count();
-    StepResult step;
+    const WorkBudget budget(slice_us, WorkBudget::thread_cpu_clock(), &cancel_);
+    PipelineStep step;
     {
-        // A restart after a topology change runs phase 1 inside the step.
+        // The step stops at its budget; the watchdog only catches a runaway evaluation.
         auto guard = arm_eval_limit();
-        step = refiner_->step(budget);
+        step = pipeline_->step(budget);
     }
     if (timed_out_) {
         fail(ErrorCode::eval_timeout, timeout_message(services_.settings.eval_timeout),
              current_.request_id);
         return false;
     }
-    gather(pending_, step.delta);
-    const MeshDelta& d = step.delta;
-    pending_changes_ += d.added_triangles.size() + d.removed_triangles.size() +
-                        d.added_vertices.size() + d.moved_vertices.size() +
-                        d.removed_vertices.size();
+    limit_phase1(std::chrono::microseconds(budget.elapsed()));
     services_.metrics.splits.add(step.splits);
     services_.metrics.merges.add(step.merges);
     splits_since_progress_ += step.splits;
+    // The step's changes are the mesh's, cancelled or not: the next frames build on them.
+    if (step.restarted) {
+        // Phase 1 resolved more of the topology: the whole mesh is replaced.
+        replace_mesh(inbox, current_.state.version, step.converged && !step.cancelled);
+    } else {
+        gather(pending_, step.delta);
+        const MeshDelta& d = step.delta;
+        pending_changes_ += d.added_triangles.size() + d.removed_triangles.size() +
+                            d.added_vertices.size() + d.moved_vertices.size() +
+                            d.removed_vertices.size();
+    }
     if (step.cancelled) return true;  // a new version or a close waits in the inbox
-
     converged_ = step.converged;
-    if (refiner_->field_change_pending()) {
+    if (pipeline_->field_change_pending()) {
         // A new version is half applied: a frame now would mix surfaces. The user is waiting for
         // it, so the next turn stays in the urgent lane (worker_pool.h).
         schedule();
@@ -416,19 +422,6 @@ bool MeshSession::refine_turn(const Inbox& inbox) {
         send_progress(inbox);
     }
     return !converged_;
-}
-
-std::uint16_t MeshSession::first_keyframe_flags() {
-    StepBudget probe;
-    probe.operations = 1;
-    const StepResult step = refiner_->step(probe);
-    gather(pending_, step.delta);
-    pending_changes_ += step.delta.added_triangles.size() + step.delta.removed_triangles.size() +
-                        step.delta.added_vertices.size() + step.delta.moved_vertices.size() +
-                        step.delta.removed_vertices.size();
-    services_.metrics.splits.add(step.splits);
-    last_frame_converged_ = step.converged && !step.cancelled;
-    return last_frame_converged_ ? protocol::frame_flags::converged : 0;
 }
 
 const std::shared_ptr<const Bytes>& MeshSession::frame_for(protocol::Access access,
@@ -528,7 +521,8 @@ std::shared_ptr<const Bytes> MeshSession::encode_keyframe(std::uint16_t flags,
 
 template <class Message>
 Message MeshSession::statistics() const {
-    const MeshStats stats = refiner_->stats();
+    const MeshStats stats = pipeline_->stats();
+    const PipelineStatus& status = pipeline_->status();
     Message message;
     message.session = id_;
     message.version = current_.state.version;
@@ -536,6 +530,8 @@ Message MeshSession::statistics() const {
     message.triangles = stats.triangles;
     message.error_max = stats.max_error;
     message.error_total = stats.total_error;
+    message.certified = status.certified;
+    message.unresolved_cells = status.unresolved_cells;
     return message;
 }
 
@@ -544,14 +540,20 @@ void MeshSession::send_progress(const Inbox& inbox) {
     if (now - last_progress_ < services_.settings.progress_interval) return;
     auto progress = statistics<protocol::Progress>();
     progress.splits_per_second = splits_since_progress_ / seconds_between(last_progress_, now);
+    progress.resolving = pipeline_->status().resolving;
     broadcast(inbox.subscribers, progress, progress.sequence, true);
     last_progress_ = now;
     splits_since_progress_ = 0;
 }
 
 void MeshSession::send_converged(const Inbox& inbox) {
-    const RefineCounters& counters = refiner_->counters();
+    const RefineCounters& counters = pipeline_->counters();
+    const PipelineStatus& status = pipeline_->status();
     auto message = statistics<protocol::Converged>();
+    message.outcome = status.region            ? protocol::Outcome::region_not_surface
+                      : message.triangles == 0 ? protocol::Outcome::no_surface
+                                               : protocol::Outcome::surface;
+    message.budget_unreachable = status.budget_unreachable;
     message.splits = counters.splits - counters_at_version_.splits;
     message.merges = counters.merges - counters_at_version_.merges;
     message.first_mesh_ms = first_mesh_ms_;
@@ -603,7 +605,7 @@ void MeshSession::fail(ErrorCode code, const std::string& message,
 
 void MeshSession::finish(protocol::Closed::Reason reason) {
     end_subscriptions(reason);
-    refiner_.reset();
+    pipeline_.reset();
     wire_ = WireMesh();
 }
 

@@ -5,13 +5,16 @@
 // the worker pool; all computing, the refiner and the frames happen in run_slice(), which one
 // worker at a time runs as a short turn:
 //   1. take the inbox (a new function version, keyframe requests, pause, close);
-//   2. start a new version: a new box or error measure means phase 1 (polygonize, under the
-//      evaluation time limit) and a keyframe to every subscriber; new parameters or a new source
-//      go to Refiner::set_field, whose changes then stream as deltas;
+//   2. start a new version: a new box or error measure means a new pipeline
+//      (progressive/pipeline.h), whose first step makes a mesh within the first-mesh budget,
+//      sent as a keyframe to every subscriber; new parameters or a new source go to
+//      Pipeline::set_field, whose changes then stream as deltas;
 //   3. send keyframes to late joiners and to connections that fell behind (at the sequence
 //      number of the last delta, so the next delta follows them without a gap);
-//   4. refine for one time slice and gather the changes; send them as one delta when the batch
-//      interval has passed, when enough triangles changed, or on convergence.
+//   4. step the pipeline for one time slice (CPU time of the worker's thread) and gather the
+//      changes; send them as one delta when the batch interval has passed, when enough triangles
+//      changed, or on convergence. A step that replaced the whole mesh (phase 1 resolved more of
+//      the topology) is sent as a keyframe instead.
 // A new version raises the cancel flag, so stale work stops within one operation. Every subscriber
 // receives the same frames (encoded once), so all end with identical meshes.
 //
@@ -22,8 +25,8 @@
 //
 // Budgets, enforced at the edges of every turn: the CPU time of the session's turns (the worker
 // thread's CPU clock) over the session's life, and its memory estimated from what it holds
-// (server/resources.h); a session over either ends with `resource_limit`. Phase 1 of a version
-// is limited in CPU time too (eval_timeout).
+// (server/resources.h); a session over either ends with `resource_limit`. A single step running
+// longer than the evaluation limit in CPU time fails the session too (eval_timeout).
 #pragma once
 
 #include <atomic>
@@ -34,9 +37,9 @@
 #include <optional>
 #include <vector>
 
+#include "progressive/pipeline.h"
 #include "protocol/frame.h"
 #include "protocol/messages.h"
-#include "refine/refiner.h"
 #include "server/client.h"
 #include "server/function_version.h"
 #include "server/log.h"
@@ -52,8 +55,12 @@ struct SessionSettings {
     Clock::duration slice = std::chrono::microseconds(2000);
     Clock::duration batch_interval = std::chrono::milliseconds(20);
     std::size_t batch_triangles = 2000;  ///< changes (triangles, vertices) that trigger a delta
-    Clock::duration eval_timeout = std::chrono::seconds(10);  ///< CPU time of one phase 1
-    Clock::duration session_cpu = std::chrono::hours(1);      ///< CPU time over the session's life
+    /// CPU time of a version's phase 1 beyond which it stops classifying and keeps the mesh it
+    /// has (unresolved cells reported); a single step running this long fails the session.
+    Clock::duration eval_timeout = std::chrono::seconds(10);
+    /// CPU time of a session's first step: the first mesh leaves within it, whatever the function.
+    Clock::duration first_mesh_budget = std::chrono::milliseconds(10);
+    Clock::duration session_cpu = std::chrono::hours(1);  ///< CPU time over the session's life
     std::uint64_t session_memory_bytes = std::uint64_t{1280} << 20;
     Clock::duration progress_interval = std::chrono::milliseconds(250);
     int position_bits = 14;
@@ -190,7 +197,11 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     bool end_subscriptions(protocol::Closed::Reason reason);
     Start start_version(FunctionVersion version, Inbox& inbox);
     Start restart(FunctionVersion& version, Inbox& inbox);
-    bool refine_turn(const Inbox& inbox);
+    bool refine_turn(Inbox& inbox);
+    /// Sends the pipeline's whole mesh as a keyframe to every subscriber, as the next frame.
+    void replace_mesh(Inbox& inbox, std::uint32_t version, bool converged);
+    /// Stops phase 1 for good once it used the version's time limit.
+    void limit_phase1(Clock::duration spent);
     void serve_keyframes(const std::vector<KeyframeRequest>& requests);
     void flush(const Inbox& inbox, bool converged);
     /// A `progress` or `converged` message with the mesh's statistics filled in.
@@ -200,9 +211,6 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     void send_converged(const Inbox& inbox);
     void observe_slice(Clock::time_point start);
     std::shared_ptr<const Bytes> encode_keyframe(std::uint16_t flags, std::uint32_t version) const;
-    /// The flags of a new version's first keyframe: converged when it already meets the
-    /// constraints (found by one refinement operation, whose change then waits in the batch).
-    std::uint16_t first_keyframe_flags();
     /// Ends the session after a failure: `error` then `closed` to every subscriber.
     void fail(protocol::ErrorCode code, const std::string& message,
               const std::optional<protocol::RequestId>& request_id);
@@ -235,8 +243,8 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
 
     // Worker state: touched only inside run_slice.
     FunctionVersion current_;
-    std::unique_ptr<Refiner> refiner_;
-    bool field_stale_ = false;  // set_field was cancelled: wait for the next version
+    std::unique_ptr<Pipeline> pipeline_;
+    Clock::duration phase1_time_{};  // CPU time of the current version's phase 1 so far
     protocol::MeshEncoding encoding_;
     WireMesh wire_;
     DeltaBuilder pending_;

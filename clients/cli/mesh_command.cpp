@@ -40,9 +40,10 @@ every vertex on the surface, and writes it to FILE:
                       where needed down to MAX (default 4,9; 0 <= MIN <= MAX <= 16; for
                       .iso the depth whose cells are the grid's cells)
   --threads N         worker threads (default 0: all cores); the mesh does not depend on it
-  --stats             print one JSON line: triangles, vertices, evaluations, time_ms, ...
-                      (with refinement also first_mesh_ms, total_ms, error_total,
-                      error_max, splits, merges)
+  --stats             print one JSON line: triangles, vertices, evaluations, time_ms,
+                      cells, unresolved_cells, certified, ... (with refinement:
+                      first_mesh_ms, total_ms, error_total, error_max, splits, merges,
+                      certified, unresolved_cells, phase1_meshes, budget_unreachable)
 )";
 
 constexpr OptionSpec kOptions[] = {{"output", true, false},  {"param", true, true},
@@ -123,6 +124,8 @@ nlohmann::ordered_json stats_json(const PolygonizeStats& stats) {
     out["cells"] = stats.cells;
     out["depth"] = stats.depth;
     out["unresolved_cells"] = stats.unresolved_cells;
+    out["certified"] = stats.certified();
+    if (stats.region_cells > 0) out["region_cells"] = stats.region_cells;
     out["collapses"] = stats.collapses;
     out["flips"] = stats.flips;
     out["time_ms"] = stats.time_ms;
@@ -178,6 +181,8 @@ int run_mesh(std::span<const std::string_view> raw_args) {
     if (depth_of_grid && !args.has("depth")) {
         settings.min_depth = settings.max_depth = *depth_of_grid;
     }
+    // A sampled grid has no detail below its cells for the octree to look for.
+    if (depth_of_grid) settings.feature_levels = 0;
     if (args.has("box")) {
         settings.box = parse_mesh_box(*args.value("box"));
     } else if (names_iso_file(source)) {
@@ -189,20 +194,24 @@ int run_mesh(std::span<const std::string_view> raw_args) {
             server_request(source, args.values("param"), settings.box, refine_options);
         return mesh_on_server(*args.value("server"), request, output, args.has("stats"));
     }
-    const PolygonizeResult result = polygonize(*field, settings);
     std::optional<RefineOutcome> refined;
-    if (refine_options.refine()) refined = refine_first_mesh(field, result.mesh, refine_options);
+    std::optional<PolygonizeResult> phase1;
+    if (refine_options.refine()) {
+        refined = refine(field, settings, refine_options);
+    } else {
+        phase1 = polygonize(*field, settings);
+    }
+    if (phase1 && phase1->stats.region_cells > 0) {
+        print_warning("the equation holds on a whole region of the box, which is no surface");
+    }
     try {
-        write_export_file(refined ? refined->mesh : result.mesh, output);
+        write_export_file(refined ? refined->mesh : phase1->mesh, output);
     } catch (const std::runtime_error& error) {
         print_error(error.what());
         return 1;
     }
-    if (args.has("stats")) {
-        nlohmann::ordered_json stats = stats_json(result.stats);
-        if (refined) add_refine_stats(stats, result.stats.time_ms, *refined);
-        print_json_line(stats);
-    }
+    if (args.has("stats"))
+        print_json_line(refined ? refine_stats(*refined) : stats_json(phase1->stats));
     return 0;
 }
 

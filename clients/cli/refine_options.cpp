@@ -36,42 +36,53 @@ RefineOptions parse_refine_options(const Arguments& args) {
     return options;
 }
 
-RefineOutcome refine_first_mesh(std::shared_ptr<const Field> field, const Mesh& first,
-                                const RefineOptions& options) {
-    const auto start = std::chrono::steady_clock::now();
-    RefineSettings settings;
-    settings.error_measure = make_error_measure(options.error_measure);
-    settings.constraint = Constraint::budget_and_error_bound(
+RefineOutcome refine(std::shared_ptr<const Field> field, const PolygonizeSettings& phase1,
+                     const RefineOptions& options) {
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    auto ms_since_start = [&] {
+        return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    };
+    PipelineSettings settings;
+    settings.phase1 = phase1;
+    settings.refine.error_measure = make_error_measure(options.error_measure);
+    settings.refine.constraint = Constraint::budget_and_error_bound(
         options.triangles.value_or(kDefaultTriangleCap), options.max_error.value_or(0.0));
-    if (options.triangles && first.triangles.size() > *options.triangles) {
-        print_warning("phase 1 alone has " + std::to_string(first.triangles.size()) +
-                      " triangles, more than --triangles " + std::to_string(*options.triangles) +
-                      " (refinement only adds triangles to it; lower --depth MIN)");
-    }
-    Refiner refiner(std::move(field), first, std::move(settings));
-    refiner.run_to_convergence();
+    Pipeline pipeline(std::move(field), std::move(settings));
     RefineOutcome outcome;
-    outcome.mesh = refiner.mesh().mesh;
-    const MeshStats stats = refiner.stats();
+    const PipelineStep first =
+        pipeline.step(WorkBudget(kFirstMeshBudgetUs, WorkBudget::thread_cpu_clock()));
+    outcome.first_mesh_ms = ms_since_start();
+    if (!first.converged) pipeline.run_to_convergence();
+    outcome.total_ms = ms_since_start();
+    outcome.mesh = pipeline.mesh().mesh;
+    const MeshStats stats = pipeline.stats();
     outcome.error_total = stats.total_error;
     outcome.error_max = stats.max_error;
-    outcome.splits = refiner.counters().splits;
-    outcome.merges = refiner.counters().merges;
-    outcome.time_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    outcome.splits = pipeline.counters().splits;
+    outcome.merges = pipeline.counters().merges;
+    outcome.status = pipeline.status();
+    outcome.phase1 = pipeline.phase1_stats();
     return outcome;
 }
 
-void add_refine_stats(nlohmann::ordered_json& stats, double first_mesh_ms,
-                      const RefineOutcome& outcome) {
+nlohmann::ordered_json refine_stats(const RefineOutcome& outcome) {
+    nlohmann::ordered_json stats;
     stats["triangles"] = outcome.mesh.triangles.size();
     stats["vertices"] = outcome.mesh.positions.size();
-    stats["first_mesh_ms"] = first_mesh_ms;
-    stats["total_ms"] = first_mesh_ms + outcome.time_ms;
+    stats["first_mesh_ms"] = outcome.first_mesh_ms;
+    stats["total_ms"] = outcome.total_ms;
     stats["error_total"] = outcome.error_total;
     stats["error_max"] = outcome.error_max;
     stats["splits"] = outcome.splits;
     stats["merges"] = outcome.merges;
+    stats["certified"] = outcome.status.certified;
+    stats["unresolved_cells"] = outcome.status.unresolved_cells;
+    stats["phase1_meshes"] = outcome.status.phase1_meshes;
+    stats["phase1_triangles"] = outcome.phase1.triangles;
+    stats["phase1_cells"] = outcome.phase1.cells;
+    stats["budget_unreachable"] = outcome.status.budget_unreachable;
+    return stats;
 }
 
 }  // namespace isomesh::cli

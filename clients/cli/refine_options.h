@@ -1,5 +1,6 @@
-// The refinement part of `isomesh mesh`: --triangles, --max-error and --error-measure run phase 2
-// (refine/refiner.h) on the phase-1 mesh.
+// The refinement part of `isomesh mesh`: --triangles, --max-error and --error-measure run the
+// progressive pipeline (progressive/pipeline.h: phase 1, simplification to the budget where
+// phase 1's mesh is larger, refinement) to convergence, as the server does.
 #pragma once
 
 #include <cstddef>
@@ -12,6 +13,8 @@
 #include "args.h"
 #include "eval/evaluator.h"
 #include "mesh/mesh.h"
+#include "polygonize/polygonizer.h"
+#include "progressive/pipeline.h"
 
 namespace isomesh::cli {
 
@@ -22,8 +25,10 @@ inline constexpr OptionSpec kRefineOptionSpecs[] = {
 inline constexpr std::size_t kDefaultTriangleCap = 2'000'000;
 
 inline constexpr std::string_view kRefineUsage =
-    R"(  --triangles N       refine (phase 2) to N triangles: met within 1 and never exceeded,
-                      unless phase 1 alone has more (then lower --depth MIN)
+    R"(  --triangles N       refine (phase 2) to N triangles: met within 1 and never exceeded
+                      (phase 1's mesh is simplified to N first if it has more, keeping its
+                      topology; where that topology needs more than N triangles, the result is
+                      the smallest mesh found, and --stats says budget_unreachable)
   --max-error E       refine until no triangle's error exceeds E (with --triangles as a
                       cap, else at most 2,000,000 triangles)
   --error-measure M   distance (default), epsilon4 or max_distance
@@ -42,20 +47,27 @@ RefineOptions parse_refine_options(const Arguments& args);
 
 struct RefineOutcome {
     Mesh mesh;
-    double time_ms = 0.0;
+    double first_mesh_ms = 0.0;  ///< the pipeline's first step (within kFirstMeshBudgetUs)
+    double total_ms = 0.0;
     double error_total = 0.0;
     double error_max = 0.0;
     std::size_t splits = 0;
     std::size_t merges = 0;
+    PipelineStatus status;
+    PolygonizeStats phase1;  ///< of the last phase-1 mesh
 };
 
-/// Refines `first` (phase 1's mesh of `field`) to the constraint the options describe.
-RefineOutcome refine_first_mesh(std::shared_ptr<const Field> field, const Mesh& first,
-                                const RefineOptions& options);
+/// The CPU time of the first step, as the server's default (microseconds).
+inline constexpr std::int64_t kFirstMeshBudgetUs = 10'000;
 
-/// Updates --stats output for a refined mesh: triangles and vertices of the output, and
-/// first_mesh_ms (phase 1), total_ms, error_total, error_max, splits, merges.
-void add_refine_stats(nlohmann::ordered_json& stats, double first_mesh_ms,
-                      const RefineOutcome& outcome);
+/// Runs the pipeline on `field` with `phase1`'s box, depths and threads to the constraint the
+/// options describe.
+RefineOutcome refine(std::shared_ptr<const Field> field, const PolygonizeSettings& phase1,
+                     const RefineOptions& options);
+
+/// --stats output of a refined mesh: triangles and vertices of the output, first_mesh_ms,
+/// total_ms, error_total, error_max, splits, merges, and phase 1's certification (certified,
+/// unresolved_cells, phase1_meshes, budget_unreachable).
+nlohmann::ordered_json refine_stats(const RefineOutcome& outcome);
 
 }  // namespace isomesh::cli

@@ -25,9 +25,10 @@ inline constexpr std::string_view kServerUsage =
 /// The `create` for an in-process run's arguments: `source` (an expression or `@model.vm`, whose
 /// text is sent), the `--param` items, the meshing box and the refinement options. Without
 /// --triangles or --max-error the server is asked for phase 1 alone (an error bound no triangle
-/// exceeds), which it starts at its own depths (those of a refining run here, kRefinePhase1MinDepth);
-/// with --max-error alone, for the in-process run's triangle cap. Throws UsageError for
-/// a sampled grid (`@grid.iso`: the protocol carries functions only) or an unreadable model file.
+/// exceeds), which it starts at its own depths (those of a refining run here,
+/// kRefinePhase1MinDepth); with --max-error alone, for the in-process run's triangle cap. Throws
+/// UsageError for a sampled grid (`@grid.iso`: the protocol carries functions only) or an
+/// unreadable model file.
 protocol::Create server_request(std::string_view source,
                                 std::span<const std::string_view> param_items, const Box& box,
                                 const RefineOptions& refine);

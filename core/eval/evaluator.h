@@ -77,6 +77,18 @@ public:
     /// Sound enclosures of f and grad f over the box (see IntervalGradient).
     virtual IntervalGradient interval_gradient(const Box& box) = 0;
 
+    // Batched forms: one call for many points or boxes (an octree cell's 8 children, the corners
+    // of many cells), so that an evaluator can run its program once for all of them. Each result
+    // is bit-identical to the single call's at the same point or box. Preconditions: equal sizes.
+    // The defaults loop over the single calls.
+
+    /// out[i] = value_gradient(points[i]).
+    virtual void value_gradients(const PointBatch& points, std::span<ValueGradient> out);
+    /// out[i] = interval(boxes[i]).
+    virtual void intervals(std::span<const Box> boxes, std::span<IntervalValue> out);
+    /// out[i] = interval_gradient(boxes[i]).
+    virtual void interval_gradients(std::span<const Box> boxes, std::span<IntervalGradient> out);
+
     /// Tape simplification (libfive, Fidget): specialises the evaluator to `box`, for example by
     /// dropping min/max branches that interval evaluation proves irrelevant there. Until the
     /// matching pop(), evaluations must be at points inside the box (or boxes inside it) and give

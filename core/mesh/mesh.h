@@ -25,6 +25,9 @@ inline constexpr std::uint32_t kNoNeighbour = std::numeric_limits<std::uint32_t>
 struct Mesh {
     std::vector<glm::dvec3> positions;
     std::vector<glm::dvec3> normals;
+    /// |grad f| at each vertex where the producer knows it (phase 1 does: it found every vertex
+    /// with the gradient), so that refinement need not evaluate it again; else empty.
+    std::vector<double> gradient_norms;
     std::vector<std::array<std::uint32_t, 3>> triangles;
     std::vector<std::array<std::uint32_t, 3>> neighbours;
     std::vector<std::uint8_t> base_edge;

@@ -33,6 +33,18 @@ class CountingEvaluator final : public Evaluator {
         ++intervals_;
         return inner_->interval_gradient(box);
     }
+    void value_gradients(const PointBatch& points, std::span<ValueGradient> out) override {
+        points_ += points.size();
+        inner_->value_gradients(points, out);
+    }
+    void intervals(std::span<const Box> boxes, std::span<IntervalValue> out) override {
+        intervals_ += boxes.size();
+        inner_->intervals(boxes, out);
+    }
+    void interval_gradients(std::span<const Box> boxes, std::span<IntervalGradient> out) override {
+        intervals_ += boxes.size();
+        inner_->interval_gradients(boxes, out);
+    }
     void push(const Box& box) override { inner_->push(box); }
     void pop() override { inner_->pop(); }
 

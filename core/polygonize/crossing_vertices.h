@@ -1,10 +1,11 @@
 // Naming the vertices where the surface crosses lattice edges, so that cells of different sizes
 // sharing part of a lattice line share its vertex.
 //
-// A crossing is named by the step of the finest lattice (max depth) on which f changes sign,
-// found by bisection on lattice points from whichever cell edge contains it. Two cells whose edges
-// overlap on a line with one sign change name its crossing alike, whatever their depths; the root
-// itself is then found once, on that finest step.
+// A crossing is named by the step of the mesh's finest cells (the deepest leaf's depth, the same
+// for every cell of one mesh) on which f changes sign, found by bisection on lattice points from
+// whichever cell edge contains it. Two cells whose edges overlap on a line with one sign change
+// name its crossing alike, whatever their depths; the root itself is then found once, on that
+// finest step.
 #pragma once
 
 #include <cstdint>
@@ -16,7 +17,7 @@
 
 namespace isomesh {
 
-/// Lattice::edge_key of the finest-lattice step holding a crossing.
+/// Lattice::edge_key of the finest step holding a crossing, with that step's depth in bits 53-57.
 using CrossingKey = std::uint64_t;
 
 /// A key for the edge of a cell at `depth` from lattice point `lower` along `axis`.
@@ -24,13 +25,13 @@ inline std::uint64_t cell_edge_key(const glm::u32vec3& lower, int axis, int dept
     return Lattice::edge_key(lower, axis) | std::uint64_t(depth) << 53;
 }
 
-/// The finest step of the cell edge (lower, axis, depth) on which f changes sign, by bisection on
-/// the lattice points of the edge (values through `values`). Precondition: the ends of the edge
-/// are on different sides (is_inside).
+/// The step at `finest_depth` of the cell edge (lower, axis, depth) on which f changes sign, by
+/// bisection on the lattice points of the edge (values through `values`). Preconditions: the ends
+/// of the edge are on different sides (is_inside); depth <= finest_depth <= lattice.max_depth().
 CrossingKey locate_crossing(CornerCache& values, const Lattice& lattice, const glm::u32vec3& lower,
-                            int axis, int depth);
+                            int axis, int depth, int finest_depth);
 
-/// The finest step `key` as a segment with its end values (which locate_crossing evaluated).
+/// The step `key` as a segment with its end values (which locate_crossing evaluated).
 EdgeSegment crossing_segment(const std::unordered_map<std::uint64_t, double>& values,
                              const Lattice& lattice, CrossingKey key);
 

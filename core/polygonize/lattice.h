@@ -26,7 +26,45 @@ struct CellId {
         return {2u * coords + glm::u32vec3(octant & 1, (octant >> 1) & 1, (octant >> 2) & 1),
                 depth + 1};
     }
+    CellId parent() const { return {coords / 2u, depth - 1}; }
+    /// The ancestor at `level` (<= depth).
+    CellId ancestor(int level) const {
+        const auto shift = static_cast<std::uint32_t>(depth - level);
+        return {coords >> shift, level};
+    }
+    bool operator==(const CellId&) const = default;
 };
+
+/// Bits of v (up to 16) spread to every third bit.
+inline std::uint64_t spread_bits3(std::uint32_t v) {
+    std::uint64_t x = v & 0xffffu;
+    x = (x | x << 16) & 0x0000ff0000ffull;
+    x = (x | x << 8) & 0x00f00f00f00full;
+    x = (x | x << 4) & 0x0c30c30c30c3ull;
+    x = (x | x << 2) & 0x249249249249ull;
+    return x;
+}
+
+/// The Morton (Z-order) code of p, x in the lowest bit: the order in which a depth-first walk of
+/// the octree visits its cells (children in octant order).
+inline std::uint64_t morton_code(const glm::u32vec3& p) {
+    return spread_bits3(p.x) | spread_bits3(p.y) << 1 | spread_bits3(p.z) << 2;
+}
+
+/// A key ordering cells by depth, then in octree order within a depth (the order in which a
+/// breadth-first walk classifies them); unique per cell.
+inline std::uint64_t level_order_key(const CellId& cell) {
+    return std::uint64_t(cell.depth) << 48 | morton_code(cell.coords);
+}
+inline CellId cell_of_level_order_key(std::uint64_t key) {
+    CellId cell;
+    cell.depth = static_cast<int>(key >> 48);
+    for (int bit = 0; bit < cell.depth; ++bit) {
+        for (int axis = 0; axis < 3; ++axis)
+            cell.coords[axis] |= static_cast<std::uint32_t>((key >> (3 * bit + axis)) & 1u) << bit;
+    }
+    return cell;
+}
 
 class Lattice {
   public:
@@ -59,6 +97,10 @@ class Lattice {
     glm::u32vec3 corner(const CellId& cell, int c) const {
         return origin(cell) + span(cell.depth) * glm::u32vec3(c & 1, (c >> 1) & 1, (c >> 2) & 1);
     }
+
+    /// The order of a depth-first walk of the octree, for cells that do not overlap: the Morton
+    /// code of the cell's lowest corner on the finest lattice.
+    std::uint64_t octree_order(const CellId& cell) const { return morton_code(origin(cell)); }
 
     Box cell_box(const CellId& cell) const {
         return {point(origin(cell)), point(origin(cell) + glm::u32vec3(span(cell.depth)))};

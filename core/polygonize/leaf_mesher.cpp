@@ -31,6 +31,11 @@ using Polygon = std::vector<VertexRef>;
 /// Vertices the leaf mesher places stay this fraction of the leaf's size away from its faces.
 constexpr double kFaceMargin = 0.05;
 
+double gradient_norm(const glm::dvec3& g) {
+    const double length = glm::length(g);
+    return std::isfinite(length) ? length : 0.0;
+}
+
 glm::dvec3 unit_or_zero(const glm::dvec3& v) {
     const double length = glm::length(v);
     return length > 0.0 && std::isfinite(length) ? v / length : glm::dvec3(0.0);
@@ -176,6 +181,9 @@ class LeafMesher {
                                     extra_positions_.end());
         out_.extra_normals.insert(out_.extra_normals.end(), extra_normals_.begin(),
                                   extra_normals_.end());
+        out_.extra_gradient_norms.insert(out_.extra_gradient_norms.end(),
+                                         extra_gradient_norms_.begin(),
+                                         extra_gradient_norms_.end());
     }
 
   private:
@@ -266,6 +274,7 @@ class LeafMesher {
         if (!point.on_surface || on_boundary(point.position, inner)) return std::nullopt;
         extra_positions_.push_back(point.position);
         extra_normals_.push_back(unit_or_zero(point.gradient));
+        extra_gradient_norms_.push_back(gradient_norm(point.gradient));
         return kExtraVertex | (extra_positions_.size() - 1);
     }
 
@@ -337,6 +346,7 @@ class LeafMesher {
     std::vector<std::array<VertexRef, 3>> triangles_;
     std::vector<glm::dvec3> extra_positions_;
     std::vector<glm::dvec3> extra_normals_;
+    std::vector<double> extra_gradient_norms_;
 };
 
 }  // namespace

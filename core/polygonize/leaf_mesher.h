@@ -28,6 +28,7 @@ struct LeafMeshes {
     std::vector<std::array<VertexRef, 3>> triangles;
     std::vector<glm::dvec3> extra_positions;
     std::vector<glm::dvec3> extra_normals;
+    std::vector<double> extra_gradient_norms;
     /// Leaves whose faces did not match their finer neighbours: they must be split.
     std::vector<CellId> unmatched;
 };

@@ -1,8 +1,24 @@
-// Octree subdivision (see octree.h). Interval pruning of octrees for implicit
-// surfaces follows Duff ("Interval arithmetic and recursive subdivision for implicit functions
-// and constructive solid geometry", SIGGRAPH 1992) and Snyder (SIGGRAPH 1992); the per-cell tape
-// simplification during the descent follows libfive (Keeter, "Massively parallel rendering of
-// complex closed-form implicit surfaces", SIGGRAPH 2020).
+// The anytime octree (see octree.h). Interval pruning of octrees for implicit surfaces follows
+// Duff ("Interval arithmetic and recursive subdivision for implicit functions and constructive
+// solid geometry", SIGGRAPH 1992) and Snyder (SIGGRAPH 1992); the per-cell tape simplification
+// follows libfive (Keeter, "Massively parallel rendering of complex closed-form implicit
+// surfaces", SIGGRAPH 2020), here along the ancestors of each cell of a breadth-first walk.
+//
+// The rules, for a cell whose enclosure of f (and, from min_depth on, of grad f) is known:
+// - f's interval excludes 0, or the mean value form does: empty, dropped;
+// - f is zero on the whole cell (its interval is exactly [0, 0]; or f is continuous with a
+//   gradient enclosure of exactly zero and f(centre) = 0, so f is constant 0): a region where the
+//   equation holds, which is no surface (`floor(x) = 0`, `0 = 0`, `x = x`): dropped and counted,
+//   and the walk stops so that the caller can say so at once;
+// - above min_depth: split;
+// - otherwise cell_classification.h decides leaf, empty or split; a cell to split at max_depth is
+//   unresolved, unless it may hide a small feature: f continuous, every component of its
+//   gradient enclosure contains 0 (a critical point may lie inside) and its corners all on one
+//   side, so that a tiny closed component or a bubble could be there, unseen by Marching Cubes.
+//   Such a cell is split further, and its descendants too while they are not leaves, down to
+//   feature_depth. (Where the corners do change sign, Marching Cubes meshes what it sees: a
+//   gradient vanishing on the surface itself, as along a singular curve of f, gains nothing from
+//   deeper cells.)
 #include "polygonize/octree.h"
 
 #include <algorithm>
@@ -11,133 +27,335 @@
 namespace isomesh {
 namespace {
 
-/// Root counting on a cell's edge bisects down to a quarter of the finest lattice step.
+/// Root counting on a cell's edge bisects down to a quarter of the finest regular level's step.
 constexpr int kSubLatticeBisections = 2;
-/// Subtrees are cut at this depth (or min_depth, if smaller): up to 8^2 = 64 tasks.
-constexpr int kTaskDepth = 2;
+/// Cells per worker task (consecutive in octree order, so that they share most ancestors).
+constexpr std::size_t kCellsPerTask = 64;
+/// Cells per round of tasks handed to the pool.
+constexpr std::size_t kCellsPerRound = 2048;
 
-bool is_cancelled(const OctreeSettings& settings) {
-    return settings.cancel != nullptr && settings.cancel->load(std::memory_order_relaxed);
+bool is_flagged(const IntervalValue& value) {
+    return value.maybe_discontinuous || value.maybe_undefined;
 }
 
-/// The cells at `depth` (all of them, in z-y-x order).
-std::vector<CellId> cells_at_depth(int depth) {
-    std::vector<CellId> cells;
-    const std::uint32_t n = 1u << depth;
-    for (std::uint32_t z = 0; z < n; ++z) {
-        for (std::uint32_t y = 0; y < n; ++y) {
-            for (std::uint32_t x = 0; x < n; ++x) cells.push_back({{x, y, z}, depth});
-        }
-    }
-    return cells;
+bool is_exact_zero(const Interval& x) {
+    return x.lo == 0.0 && x.hi == 0.0;
 }
 
-/// Whether f provably has no zero in `cell`, given its enclosure: by the natural interval, or
-/// else by the mean value form around the cell's centre (a lattice point, kept in `corners`: it
-/// is a corner of the cell's children if the cell is split).
-bool provably_empty(Evaluator& evaluator, CornerCache& corners, const Lattice& lattice,
-                    const CellId& cell, const IntervalGradient& enclosure) {
-    if (enclosure.value.value.excludes_zero()) return true;
-    if (enclosure.value.maybe_discontinuous || enclosure.value.maybe_undefined) return false;
-    const Box box = lattice.cell_box(cell);
-    const double center =
-        cell.depth < lattice.max_depth()
-            ? corners.value(lattice.origin(cell) + glm::u32vec3(lattice.span(cell.depth) / 2))
-            : evaluator.value(box.center());
-    return mean_value_excludes_zero(enclosure, center, box);
+/// f is zero everywhere on the cell.
+bool is_zero_region(const IntervalGradient& enclosure, double center_value) {
+    if (is_flagged(enclosure.value)) return false;
+    if (is_exact_zero(enclosure.value.value)) return true;
+    return center_value == 0.0 && is_exact_zero(enclosure.gradient[0]) &&
+           is_exact_zero(enclosure.gradient[1]) && is_exact_zero(enclosure.gradient[2]);
 }
 
-/// Depth-first walk of one subtree, down to the leaves of the classification.
-class ClassificationWalk {
+/// f is smooth on the cell and its gradient may vanish somewhere in it.
+bool may_hide_feature(const IntervalGradient& enclosure) {
+    if (is_flagged(enclosure.value)) return false;
+    return std::all_of(std::begin(enclosure.gradient), std::end(enclosure.gradient),
+                       [](const Interval& g) { return g.contains(0.0); });
+}
+
+/// Classifies cells one level at a time; walks each cell's ancestors with push/pop.
+class CellClassifier {
   public:
-    ClassificationWalk(Evaluator& evaluator, const Lattice& lattice, const OctreeSettings& settings,
-                       const std::unordered_map<std::uint64_t, double>* known = nullptr)
+    CellClassifier(Evaluator& evaluator, const Lattice& lattice, const OctreeSettings& settings,
+                   const ValueMap* known)
         : evaluator_(evaluator),
           lattice_(lattice),
           settings_(settings),
           corners_(evaluator, lattice, known) {}
 
-    void visit(const CellId& cell) {
-        if (is_cancelled(settings_)) return;
+    ~CellClassifier() { walk_to_depth(0); }
+    CellClassifier(const CellClassifier&) = delete;
+    CellClassifier& operator=(const CellClassifier&) = delete;
+
+    /// Classifies cells (one level, in octree order), the children of one parent together, until
+    /// the budget is exhausted; returns how many were classified.
+    std::size_t classify(std::span<const CellId> cells, std::span<CellOutcome> out,
+                         const WorkBudget& budget) {
+        std::size_t done = 0;
+        while (done < cells.size()) {
+            if (budget.exhausted()) break;
+            std::size_t end = done + 1;
+            while (end < cells.size() && cells[end].parent() == cells[done].parent()) ++end;
+            if (cells[done].depth > 0) walk_to(cells[done].parent());
+            const std::size_t classified = classify_siblings(
+                cells.subspan(done, end - done), out.subspan(done, end - done), budget);
+            done += classified;
+            if (done < end) break;
+        }
+        return done;
+    }
+
+    /// One cell, with the evaluator already specialised to its parent (or not at all).
+    CellOutcome classify_one(const CellId& cell) {
         const Box box = lattice_.cell_box(cell);
-        if (cell.depth < settings_.min_depth) {
-            if (evaluator_.interval(box).value.excludes_zero()) return;
-            descend(cell, box);
-            return;
-        }
-        const IntervalGradient enclosure = evaluator_.interval_gradient(box);
-        if (provably_empty(evaluator_, corners_, lattice_, cell, enclosure)) return;
-        const int bisections = lattice_.max_depth() - cell.depth + kSubLatticeBisections;
-        switch (classify_cell(evaluator_, corners_, lattice_, cell, enclosure, bisections)) {
-            case CellVerdict::Empty:
-                return;
-            case CellVerdict::Leaf:
-                leaves.push_back(cell);
-                return;
-            case CellVerdict::Split:
-                if (cell.depth == lattice_.max_depth()) {
-                    leaves.push_back(cell);
-                    ++unresolved;
-                } else {
-                    descend(cell, box);
-                }
-                return;
-        }
+        if (cell.depth < settings_.min_depth) return coarse_outcome(evaluator_.interval(box));
+        return outcome(cell, evaluator_.interval_gradient(box));
     }
 
     CornerCache& corners() { return corners_; }
 
-    void descend(const CellId& cell, const Box& box) {
-        evaluator_.push(box);
-        for (int octant = 0; octant < 8; ++octant) visit(cell.child(octant));
-        evaluator_.pop();
+  private:
+    /// The siblings' enclosures in one batch, then each one's outcome; stops (returning how many
+    /// were classified, at least one) when the budget is exhausted.
+    std::size_t classify_siblings(std::span<const CellId> cells, std::span<CellOutcome> out,
+                                  const WorkBudget& budget) {
+        boxes_.clear();
+        for (const CellId& cell : cells) boxes_.push_back(lattice_.cell_box(cell));
+        if (cells.front().depth < settings_.min_depth) {
+            values_.resize(cells.size());
+            evaluator_.intervals(boxes_, values_);
+            for (std::size_t i = 0; i < cells.size(); ++i) out[i] = coarse_outcome(values_[i]);
+            return cells.size();
+        }
+        enclosures_.resize(cells.size());
+        evaluator_.interval_gradients(boxes_, enclosures_);
+        for (std::size_t i = 0; i < cells.size(); ++i) {
+            if (i > 0 && budget.exhausted()) return i;
+            out[i] = outcome(cells[i], enclosures_[i]);
+        }
+        return cells.size();
     }
 
-    std::vector<CellId> leaves;
-    std::size_t unresolved = 0;
+    static CellOutcome coarse_outcome(const IntervalValue& value) {
+        if (value.value.excludes_zero()) return CellOutcome::Empty;
+        if (!is_flagged(value) && is_exact_zero(value.value)) return CellOutcome::Region;
+        return CellOutcome::Split;
+    }
 
-  private:
+    /// f at the cell's centre: a lattice point (a corner of the children) unless the cell is on
+    /// the finest lattice.
+    double center_value(const CellId& cell, const Box& box) {
+        if (cell.depth >= lattice_.max_depth()) return evaluator_.value(box.center());
+        return corners_.value(lattice_.origin(cell) + glm::u32vec3(lattice_.span(cell.depth) / 2));
+    }
+
+    CellOutcome outcome(const CellId& cell, const IntervalGradient& enclosure) {
+        if (enclosure.value.value.excludes_zero()) return CellOutcome::Empty;
+        const Box box = lattice_.cell_box(cell);
+        if (!is_flagged(enclosure.value)) {
+            const double center = center_value(cell, box);
+            if (is_zero_region(enclosure, center)) return CellOutcome::Region;
+            if (mean_value_excludes_zero(enclosure, center, box)) return CellOutcome::Empty;
+        }
+        const int bisections =
+            std::max(settings_.max_depth, cell.depth) - cell.depth + kSubLatticeBisections;
+        switch (classify_cell(evaluator_, corners_, lattice_, cell, enclosure, bisections)) {
+            case CellVerdict::Empty:
+                return CellOutcome::Empty;
+            case CellVerdict::Leaf:
+                return CellOutcome::Leaf;
+            case CellVerdict::Split:
+                break;
+        }
+        if (cell.depth < settings_.max_depth) return CellOutcome::Split;
+        if (cell.depth >= settings_.feature_depth || is_flagged(enclosure.value))
+            return CellOutcome::Unresolved;
+        // Below max_depth lie only the subtrees of cells that may hide a feature.
+        if (cell.depth > settings_.max_depth) return CellOutcome::Split;
+        return may_hide_feature(enclosure) && corners_agree(cell) ? CellOutcome::Split
+                                                                  : CellOutcome::Unresolved;
+    }
+
+    /// All corners of `cell` are on one side: Marching Cubes sees nothing there, so whatever
+    /// surface it holds would be lost.
+    bool corners_agree(const CellId& cell) {
+        const bool inside = is_inside(corners_.value(lattice_.corner(cell, 0)));
+        for (int c = 1; c < 8; ++c)
+            if (is_inside(corners_.value(lattice_.corner(cell, c))) != inside) return false;
+        return true;
+    }
+
+    /// Specialises the evaluator to `cell` and its ancestors (tape simplification), reusing the
+    /// specialisations of the ancestors it shares with the previous cell.
+    void walk_to(const CellId& cell) {
+        std::size_t common = 0;
+        while (common < path_.size() && common <= static_cast<std::size_t>(cell.depth) &&
+               path_[common] == cell.ancestor(static_cast<int>(common)))
+            ++common;
+        walk_to_depth(common);
+        for (int level = static_cast<int>(path_.size()); level <= cell.depth; ++level) {
+            const CellId ancestor = cell.ancestor(level);
+            evaluator_.push(lattice_.cell_box(ancestor));
+            path_.push_back(ancestor);
+        }
+    }
+
+    void walk_to_depth(std::size_t depth) {
+        while (path_.size() > depth) {
+            evaluator_.pop();
+            path_.pop_back();
+        }
+    }
+
     Evaluator& evaluator_;
     const Lattice& lattice_;
     const OctreeSettings& settings_;
     CornerCache corners_;
+    std::vector<CellId> path_;  // path_[k]: the pushed ancestor at depth k
+    std::vector<Box> boxes_;
+    std::vector<IntervalValue> values_;
+    std::vector<IntervalGradient> enclosures_;
 };
+
+/// Runs of consecutive cells for the workers, cut where the parent changes once a run is long
+/// enough, so that the children of one parent are classified together.
+std::vector<std::pair<std::size_t, std::size_t>> task_ranges(std::span<const CellId> cells) {
+    std::vector<std::pair<std::size_t, std::size_t>> ranges;
+    std::size_t begin = 0;
+    for (std::size_t i = 1; i <= cells.size(); ++i) {
+        const bool end = i == cells.size();
+        if (end || (i - begin >= kCellsPerTask && cells[i].parent() != cells[i - 1].parent())) {
+            ranges.emplace_back(begin, i);
+            begin = i;
+        }
+    }
+    return ranges;
+}
 
 }  // namespace
 
-OctreeLeaves find_leaves(WorkerPool& workers, const Lattice& lattice,
-                         const OctreeSettings& settings) {
-    assert(settings.min_depth >= 0 && settings.min_depth <= settings.max_depth);
-    assert(settings.max_depth == lattice.max_depth());
-    OctreeLeaves result;
-    const std::vector<CellId> roots = cells_at_depth(std::min(kTaskDepth, settings.min_depth));
-    std::vector<std::vector<CellId>> subtree_leaves(roots.size());
-    std::vector<std::unordered_map<std::uint64_t, double>> subtree_values(roots.size());
-    std::vector<std::size_t> subtree_unresolved(roots.size());
-    workers.for_each(roots.size(), [&](std::size_t i, CountingEvaluator& evaluator) {
-        ClassificationWalk walk(evaluator, lattice, settings);
-        walk.visit(roots[i]);
-        subtree_leaves[i] = std::move(walk.leaves);
-        subtree_values[i] = std::move(walk.corners().values());
-        subtree_unresolved[i] = walk.unresolved;
-    });
-    for (std::size_t i = 0; i < roots.size(); ++i) {
-        result.leaves.insert(result.leaves.end(), subtree_leaves[i].begin(),
-                             subtree_leaves[i].end());
-        result.known_values.merge(subtree_values[i]);
-        result.unresolved += subtree_unresolved[i];
-    }
-    result.cancelled = is_cancelled(settings);
-    return result;
+Octree::Octree(const Lattice& lattice, const OctreeSettings& settings)
+    : lattice_(lattice), settings_(settings) {
+    assert(lattice.max_depth() == kMaxOctreeDepth);
+    assert(0 <= settings.min_depth && settings.min_depth <= settings.max_depth &&
+           settings.max_depth <= settings.feature_depth &&
+           settings.feature_depth <= kMaxOctreeDepth);
+    pending_.insert(level_order_key(CellId{}));
+    counts_.pending = 1;
 }
 
-OctreeLeaves split_leaf(Evaluator& evaluator, const Lattice& lattice,
-                        const OctreeSettings& settings, const CellId& leaf,
-                        const std::unordered_map<std::uint64_t, double>& known_values) {
-    assert(leaf.depth < lattice.max_depth());
-    ClassificationWalk walk(evaluator, lattice, settings, &known_values);
-    walk.descend(leaf, lattice.cell_box(leaf));
-    return {std::move(walk.leaves), std::move(walk.corners().values()), walk.unresolved, false};
+void Octree::advance(EvaluatorPool& pool, ValueMap& values, const WorkBudget& budget,
+                     std::size_t max_frontier) {
+    std::vector<CellId> round;
+    while (!pending_.empty() && !found_region() && !budget.exhausted()) {
+        const std::size_t frontier = pending_.size() + settled_.size();
+        if (frontier >= max_frontier) break;
+        // The next cells of the shallowest pending level: as many as may be split (into 8 each)
+        // without passing max_frontier.
+        const std::size_t room = std::min(kCellsPerRound, (max_frontier - frontier) / 7 + 1);
+        round.clear();
+        const int depth = cell_of_level_order_key(*pending_.begin()).depth;
+        for (auto it = pending_.begin(); it != pending_.end() && round.size() < room; ++it) {
+            const CellId cell = cell_of_level_order_key(*it);
+            if (cell.depth != depth) break;
+            round.push_back(cell);
+        }
+        const auto ranges = task_ranges(round);
+        std::vector<CellOutcome> outcomes(round.size());
+        std::vector<std::size_t> classified(ranges.size(), 0);
+        std::vector<ValueMap> evaluated(ranges.size());
+        pool.for_each(ranges.size(), [&](std::size_t task, CountingEvaluator& evaluator) {
+            const auto [begin, end] = ranges[task];
+            CellClassifier classifier(evaluator, lattice_, settings_, &values);
+            classified[task] =
+                classifier.classify(std::span(round).subspan(begin, end - begin),
+                                    std::span(outcomes).subspan(begin, end - begin), budget);
+            evaluated[task] = std::move(classifier.corners().values());
+        });
+        // In octree order, whatever the workers' timing: the frontier does not depend on it.
+        for (std::size_t task = 0; task < ranges.size(); ++task) {
+            for (std::size_t i = ranges[task].first; i < ranges[task].first + classified[task];
+                 ++i) {
+                pending_.erase(level_order_key(round[i]));
+                apply(round[i], outcomes[i]);
+            }
+            values.merge(evaluated[task]);
+        }
+        counts_.pending = pending_.size();
+    }
+}
+
+void Octree::apply(const CellId& cell, CellOutcome outcome) {
+    ++counts_.classified;
+    counts_.depth = std::max(counts_.depth, cell.depth);
+    switch (outcome) {
+        case CellOutcome::Empty:
+            return;
+        case CellOutcome::Region:
+            ++counts_.regions;
+            return;
+        case CellOutcome::Leaf:
+            settled_.push_back({cell, CellState::Leaf});
+            ++counts_.leaves;
+            return;
+        case CellOutcome::Split:
+            if (pending_.size() + settled_.size() + 8 <= settings_.max_cells) {
+                for (int octant = 0; octant < 8; ++octant)
+                    pending_.insert(level_order_key(cell.child(octant)));
+                return;
+            }
+            ++counts_.capped;
+            [[fallthrough]];
+        case CellOutcome::Unresolved:
+            settled_.push_back({cell, CellState::Unresolved});
+            ++counts_.unresolved;
+            return;
+    }
+}
+
+void Octree::settle_pending() {
+    for (std::uint64_t key : pending_) {
+        settled_.push_back({cell_of_level_order_key(key), CellState::Unresolved});
+        ++counts_.unresolved;
+    }
+    pending_.clear();
+    counts_.pending = 0;
+}
+
+std::vector<FrontierCell> Octree::frontier() const {
+    std::vector<FrontierCell> cells = settled_;
+    for (std::uint64_t key : pending_) cells.push_back({cell_of_level_order_key(key)});
+    std::sort(cells.begin(), cells.end(), [&](const FrontierCell& a, const FrontierCell& b) {
+        return lattice_.octree_order(a.cell) < lattice_.octree_order(b.cell);
+    });
+    return cells;
+}
+
+namespace {
+
+/// Depth-first classification of a subtree (split_settled).
+void classify_subtree(Evaluator& evaluator, CellClassifier& classifier, const Lattice& lattice,
+                      const CellId& cell, std::vector<FrontierCell>& out,
+                      const WorkBudget& budget) {
+    evaluator.push(lattice.cell_box(cell));
+    for (int octant = 0; octant < 8 && !budget.cancelled(); ++octant) {
+        const CellId child = cell.child(octant);
+        switch (classifier.classify_one(child)) {
+            case CellOutcome::Empty:
+            case CellOutcome::Region:
+                break;
+            case CellOutcome::Leaf:
+                out.push_back({child, CellState::Leaf});
+                break;
+            case CellOutcome::Unresolved:
+                out.push_back({child, CellState::Unresolved});
+                break;
+            case CellOutcome::Split:
+                classify_subtree(evaluator, classifier, lattice, child, out, budget);
+                break;
+        }
+    }
+    evaluator.pop();
+}
+
+}  // namespace
+
+std::vector<FrontierCell> split_settled(Evaluator& evaluator, const Lattice& lattice,
+                                        const OctreeSettings& settings, const CellId& cell,
+                                        const ValueMap& known, ValueMap& evaluated,
+                                        const WorkBudget& budget) {
+    assert(cell.depth < lattice.max_depth());
+    std::vector<FrontierCell> out;
+    {
+        CellClassifier classifier(evaluator, lattice, settings, &known);
+        classify_subtree(evaluator, classifier, lattice, cell, out, budget);
+        for (auto& [key, value] : classifier.corners().values()) evaluated.emplace(key, value);
+    }
+    return out;
 }
 
 }  // namespace isomesh

@@ -1,57 +1,119 @@
-// The octree of the polygonizer's first subphase (thesis 3.3.2): the cells in which Marching
-// Cubes 33 will mesh the surface.
+// The octree of phase 1 (thesis 3.3.2), built anytime: the cells in which Marching Cubes 33 will
+// mesh the surface, classified a few at a time, the largest first, so that whenever the work is
+// interrupted (a time slice ends) the frontier covers the whole box at a uniform resolution, and
+// a mesh can be made of it at once (polygonizer.h).
+//
+// Every cell is in one of these states:
+// - pending: not yet classified (the mesh builder treats it as a leaf without guarantee);
+// - leaf: Marching Cubes 33 on its corners has the surface's topology (cell_classification.h);
+// - unresolved: it reached the deepest level without meeting the leaf conditions (meshed anyway,
+//   without the topology guarantee: a singular point, a crease of a CSG model);
+// - dropped: interval arithmetic proved f has no zero in it, or f is zero on all of it (a region
+//   where the equation holds, which is not a surface: see regions()).
+// Classification is a pure function of the cell, so the final frontier does not depend on how the
+// work was cut into slices, nor on the number of threads.
 #pragma once
 
-#include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <set>
+#include <span>
 #include <unordered_map>
 #include <vector>
 
 #include "polygonize/cell_classification.h"
+#include "polygonize/evaluator_pool.h"
 #include "polygonize/lattice.h"
-#include "polygonize/worker_pool.h"
+#include "work/work_budget.h"
 
 namespace isomesh {
 
+using ValueMap = std::unordered_map<std::uint64_t, double>;
+
 struct OctreeSettings {
+    /// Every cell down to min_depth is examined (so that no coarse cell hides a surface that
+    /// interval arithmetic cannot rule out); below it, cells are split only where the surface may
+    /// be and its topology is not yet certain, down to max_depth.
     int min_depth = 4;
     int max_depth = 9;
-    const std::atomic<bool>* cancel = nullptr;
+    /// A cell that stays unresolved at max_depth although f is smooth in it and its gradient may
+    /// vanish there (a critical point: a tiny closed component, a thin neck, a bubble) is split
+    /// further, down to this depth. max_depth <= feature_depth <= kMaxOctreeDepth.
+    int feature_depth = 12;
+    /// The most cells the frontier may hold (a memory bound): past it, a cell that would be split
+    /// is kept, unresolved.
+    std::size_t max_cells = 2'000'000;
 };
 
-struct OctreeLeaves {
-    /// The leaves where f may have a zero, of various depths, in octree order.
-    std::vector<CellId> leaves;
-    /// Values of f at lattice points evaluated while building the tree (corners of cells whose
-    /// edges were examined, centres of cells), to be reused rather than evaluated again.
-    std::unordered_map<std::uint64_t, double> known_values;
-    /// Leaves that reached max_depth without meeting the leaf conditions (meshed anyway, without
-    /// the topology guarantee).
+enum class CellState : std::uint8_t { Pending, Leaf, Unresolved };
+
+struct FrontierCell {
+    CellId cell;
+    CellState state = CellState::Pending;
+};
+
+struct OctreeCounts {
+    std::size_t pending = 0;
+    std::size_t leaves = 0;
     std::size_t unresolved = 0;
-    bool cancelled = false;
+    /// Cells on which f is zero everywhere (the equation holds on a region).
+    std::size_t regions = 0;
+    /// Cells classified so far.
+    std::size_t classified = 0;
+    /// Splits refused because the frontier was full (settings.max_cells).
+    std::size_t capped = 0;
+    /// The deepest level reached.
+    int depth = 0;
 };
 
-/// Builds the octree over lattice.box() and returns its leaves.
-///
-/// Down to min_depth every cell is examined; a cell is dropped only when interval arithmetic
-/// proves f has no zero in it (the natural interval, or the mean value form). From min_depth on,
-/// each cell is classified (cell_classification.h) and split until it is a leaf (Marching Cubes
-/// 33 on its corners has the surface's topology) or max_depth is reached.
-///
-/// Work is split into subtrees handed to the pool's workers; each subtree is walked depth first
-/// with Evaluator::push/pop tape simplification, and results are merged in subtree order, so the
-/// output does not depend on the number of workers.
-/// Preconditions: 0 <= min_depth <= max_depth == lattice.max_depth().
-OctreeLeaves find_leaves(WorkerPool& workers, const Lattice& lattice,
-                         const OctreeSettings& settings);
+/// What the classification decided for one cell (see octree.cpp for the rules).
+enum class CellOutcome : std::uint8_t { Empty, Region, Leaf, Split, Unresolved };
 
-/// Replaces `leaf` by the leaves of its subtree: its children, classified like any cell below
-/// min_depth (so the guarantees hold for them too) and split further if they need it. Values it
-/// evaluates go to known_values; unresolved counts the new leaves accepted at max_depth.
-/// Precondition: leaf.depth < lattice.max_depth().
-OctreeLeaves split_leaf(Evaluator& evaluator, const Lattice& lattice,
-                        const OctreeSettings& settings, const CellId& leaf,
-                        const std::unordered_map<std::uint64_t, double>& known_values);
+class Octree {
+  public:
+    /// Starts with the root cell pending. Preconditions: lattice.max_depth() == kMaxOctreeDepth;
+    /// 0 <= min_depth <= max_depth <= feature_depth <= kMaxOctreeDepth.
+    Octree(const Lattice& lattice, const OctreeSettings& settings);
+
+    /// Classifies pending cells, shallowest first and in octree order within a level, on the
+    /// pool's workers (each walking its cells' ancestors with Evaluator::push/pop for tape
+    /// simplification), until none is left, a region is found, the budget is exhausted (checked
+    /// before every cell), or the frontier holds `max_frontier` cells (about: one classification
+    /// may add up to 8). Values of f it evaluates are added to `values`.
+    void advance(EvaluatorPool& pool, ValueMap& values, const WorkBudget& budget,
+                 std::size_t max_frontier = ~std::size_t{0});
+
+    /// No cell is pending.
+    bool complete() const { return pending_.empty(); }
+    /// f is zero on some whole cell: the equation holds on a region, which is no surface.
+    bool found_region() const { return counts_.regions > 0; }
+    /// Every pending cell becomes unresolved (the work is stopped for good).
+    void settle_pending();
+
+    /// The frontier (pending, leaf and unresolved cells), in octree order.
+    std::vector<FrontierCell> frontier() const;
+    const OctreeCounts& counts() const { return counts_; }
+    const Lattice& lattice() const { return lattice_; }
+    const OctreeSettings& settings() const { return settings_; }
+
+  private:
+    void apply(const CellId& cell, CellOutcome outcome);
+
+    Lattice lattice_;
+    OctreeSettings settings_;
+    std::set<std::uint64_t> pending_;  // level_order_key: shallowest first, octree order
+    std::vector<FrontierCell> settled_;
+    OctreeCounts counts_;
+};
+
+/// Replaces settled cell `cell` (a leaf or an unresolved cell the mesh builder must split to match
+/// finer neighbours) by the leaves of its subtree: its children, classified like any cell (so the
+/// guarantees hold for them), split further while they need it. Values of f it evaluates go to
+/// `evaluated` (those in `known` are reused). Stops early (the result is then incomplete) when
+/// the budget is cancelled. Precondition: cell.depth < kMaxOctreeDepth.
+std::vector<FrontierCell> split_settled(Evaluator& evaluator, const Lattice& lattice,
+                                        const OctreeSettings& settings, const CellId& cell,
+                                        const ValueMap& known, ValueMap& evaluated,
+                                        const WorkBudget& budget);
 
 }  // namespace isomesh

@@ -1,18 +1,20 @@
 // The polygonization phase (thesis 3.3.2), in the order the data flows:
 // 1. octree.h: the leaves where the surface may be, each as deep as its topology needed
 //    (interval arithmetic finds what corner sampling misses; cell_classification.h decides when
-//    the topology inside a cell is certain);
-// 2. corner values of the leaves, evaluated once each, in batches;
-// 3. crossings: each crossed leaf edge is narrowed by bisection to the finest lattice step where
-//    f changes sign (crossing_vertices.h), which names its vertex, so leaves of different sizes
-//    sharing a lattice line share the vertex;
+//    the topology inside a cell is certain), classified a slice at a time, largest first;
+// 2. the mesh of the octree's frontier as it stands (final once every cell is classified):
+//    corner values of the leaves, evaluated once each, in batches;
+// 3. crossings: each crossed leaf edge is narrowed by bisection to the step of the finest leaf
+//    where f changes sign (crossing_vertices.h), which names its vertex, so leaves of different
+//    sizes sharing a lattice line share the vertex;
 // 4. the octree is graded along the surface (a leaf is split while a neighbour across a face the
 //    surface crosses is two levels finer), then Marching Cubes 33 runs in every leaf
 //    (leaf_mesher.h), with crack patching where a neighbour is finer; leaves whose faces do not
 //    match their finer neighbours are split and everything is meshed again, until all match. The
 //    thesis refines every surface cell to one common depth instead, which is simpler but lets one
 //    small feature (a thin neck, a crease) refine the whole surface: millions of triangles where
-//    tens of thousands suffice;
+//    tens of thousands suffice. These splits belong to this mesh only: the octree keeps its own
+//    frontier, so that its final state does not depend on when meshes were made;
 // 5. one root per crossing used, found on its finest step by safeguarded Newton iteration with
 //    the gradient (edge_roots.h); crossings that are poles or jumps are no roots, and the
 //    triangles touching them are dropped;
@@ -39,9 +41,7 @@
 #include "polygonize/leaf_index.h"
 #include "polygonize/leaf_mesher.h"
 #include "polygonize/mc33.h"
-#include "polygonize/octree.h"
 #include "polygonize/thin_triangle_cleanup.h"
-#include "polygonize/worker_pool.h"
 
 namespace isomesh {
 namespace {
@@ -54,31 +54,18 @@ constexpr int kMaxThreads = 256;
 constexpr double kMinEdgeFraction = 0.1;
 constexpr double kMinQuality = 0.1;
 
-void validate(const PolygonizeSettings& s) {
-    for (int axis = 0; axis < 3; ++axis) {
-        if (!std::isfinite(s.box.lo[axis]) || !std::isfinite(s.box.hi[axis]) ||
-            !(s.box.lo[axis] < s.box.hi[axis])) {
-            throw std::invalid_argument(
-                "the meshing box must be finite with lo < hi on every axis");
-        }
-    }
-    if (s.min_depth < 0 || s.max_depth > kMaxOctreeDepth || s.min_depth > s.max_depth) {
-        throw std::invalid_argument("octree depths must satisfy 0 <= min <= max <= " +
-                                    std::to_string(kMaxOctreeDepth));
-    }
-    if (s.threads < 0 || s.threads > kMaxThreads) {
-        throw std::invalid_argument("threads must be between 0 (all cores) and " +
-                                    std::to_string(kMaxThreads));
-    }
-}
-
 int thread_count(int requested) {
     if (requested > 0) return requested;
     return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
 }
 
-bool is_cancelled(const PolygonizeSettings& s) {
-    return s.cancel != nullptr && s.cancel->load(std::memory_order_relaxed);
+OctreeSettings octree_settings(const PolygonizeSettings& s) {
+    OctreeSettings o;
+    o.min_depth = s.min_depth;
+    o.max_depth = s.max_depth;
+    o.feature_depth = std::min(kMaxOctreeDepth, s.max_depth + s.feature_levels);
+    o.max_cells = s.max_cells;
+    return o;
 }
 
 glm::dvec3 unit_or_zero(const glm::dvec3& v) {
@@ -90,11 +77,23 @@ std::size_t task_count(std::size_t items, std::size_t per_task) {
     return (items + per_task - 1) / per_task;
 }
 
-using ValueMap = std::unordered_map<std::uint64_t, double>;
+std::vector<CellId> cells_of(const std::vector<FrontierCell>& frontier) {
+    std::vector<CellId> cells;
+    cells.reserve(frontier.size());
+    for (const FrontierCell& f : frontier) cells.push_back(f.cell);
+    return cells;
+}
+
+int deepest(const std::vector<FrontierCell>& frontier) {
+    int depth = 0;
+    for (const FrontierCell& f : frontier) depth = std::max(depth, f.cell.depth);
+    return depth;
+}
 
 /// Evaluates f, in batches, at the corners of `leaves` not in `values`.
-void evaluate_corners(WorkerPool& workers, const Lattice& lattice,
-                      const std::vector<CellId>& leaves, ValueMap& values) {
+void evaluate_corners(EvaluatorPool& workers, const Lattice& lattice,
+                      const std::vector<CellId>& leaves, ValueMap& values,
+                      const WorkBudget& budget) {
     std::vector<std::uint64_t> missing;
     for (const CellId& cell : leaves) {
         for (int c = 0; c < 8; ++c) {
@@ -107,6 +106,7 @@ void evaluate_corners(WorkerPool& workers, const Lattice& lattice,
     std::vector<double> results(missing.size());
     workers.for_each(task_count(missing.size(), kPointsPerTask),
                      [&](std::size_t task, CountingEvaluator& evaluator) {
+                         if (budget.cancelled()) return;
                          const std::size_t begin = task * kPointsPerTask;
                          const std::size_t n = std::min(kPointsPerTask, missing.size() - begin);
                          std::vector<double> x(n), y(n), z(n);
@@ -118,14 +118,17 @@ void evaluate_corners(WorkerPool& workers, const Lattice& lattice,
                          }
                          evaluator.values({x, y, z}, std::span(results).subspan(begin, n));
                      });
+    if (budget.cancelled()) return;
     for (std::size_t i = 0; i < missing.size(); ++i) values.emplace(missing[i], results[i]);
 }
 
 /// Locates the crossing of every edge of `leaves` whose ends are on different sides and that is
-/// not in `crossings` yet (crossing_vertices.h), adding the values it evaluates to `values`.
-void locate_crossings(WorkerPool& workers, const Lattice& lattice,
-                      const std::vector<CellId>& leaves, ValueMap& values,
-                      std::unordered_map<std::uint64_t, CrossingKey>& crossings) {
+/// not in `crossings` yet (crossing_vertices.h), on steps of `finest_depth`, adding the values it
+/// evaluates to `values`.
+void locate_crossings(EvaluatorPool& workers, const Lattice& lattice,
+                      const std::vector<CellId>& leaves, int finest_depth, ValueMap& values,
+                      std::unordered_map<std::uint64_t, CrossingKey>& crossings,
+                      const WorkBudget& budget) {
     struct Edge {
         std::uint64_t key;
         glm::u32vec3 lower;
@@ -155,38 +158,56 @@ void locate_crossings(WorkerPool& workers, const Lattice& lattice,
     workers.for_each(evaluated.size(), [&](std::size_t task, CountingEvaluator& evaluator) {
         CornerCache cache(evaluator, lattice, &values);
         const std::size_t end = std::min(edges.size(), (task + 1) * kEdgesPerTask);
-        for (std::size_t i = task * kEdgesPerTask; i < end; ++i) {
-            located[i] =
-                locate_crossing(cache, lattice, edges[i].lower, edges[i].axis, edges[i].depth);
+        for (std::size_t i = task * kEdgesPerTask; i < end && !budget.cancelled(); ++i) {
+            located[i] = locate_crossing(cache, lattice, edges[i].lower, edges[i].axis,
+                                         edges[i].depth, finest_depth);
         }
         evaluated[task] = std::move(cache.values());
     });
+    if (budget.cancelled()) return;
     for (ValueMap& part : evaluated) values.merge(part);
     for (std::size_t i = 0; i < edges.size(); ++i) crossings.emplace(edges[i].key, located[i]);
 }
 
-/// Replaces each leaf of `which` (a subsequence of `leaves`) by the leaves of its subtree,
-/// keeping the octree order; the new leaves are appended to `added`.
-std::vector<CellId> split_leaves(WorkerPool& workers, const Lattice& lattice,
-                                 const OctreeSettings& settings, const std::vector<CellId>& leaves,
-                                 const std::vector<CellId>& which, ValueMap& values,
-                                 std::size_t& unresolved, std::vector<CellId>& added) {
-    std::vector<OctreeLeaves> subtrees(which.size());
-    workers.for_each(which.size(), [&](std::size_t i, CountingEvaluator& evaluator) {
-        subtrees[i] = split_leaf(evaluator, lattice, settings, which[i], values);
-    });
-    std::vector<CellId> result;
+/// Replaces each cell of `which` (a subsequence of `frontier`'s cells) by its subtree, keeping
+/// the octree order: a pending cell by its 8 children, pending too; a settled cell by the leaves
+/// of its classified subtree (split_settled), or, in a mesh of an unfinished octree (`preview`),
+/// by its 8 children as pending cells too (classifying a subtree there could cost more than the
+/// whole octree so far). The new cells are appended to `added`.
+std::vector<FrontierCell> split_cells(EvaluatorPool& workers, const Lattice& lattice,
+                                      const OctreeSettings& settings,
+                                      const std::vector<FrontierCell>& frontier,
+                                      const std::vector<CellId>& which, bool preview,
+                                      ValueMap& values, std::vector<CellId>& added,
+                                      const WorkBudget& budget) {
+    std::vector<std::vector<FrontierCell>> subtrees(which.size());
+    std::vector<ValueMap> evaluated(which.size());
     std::size_t next = 0;
-    for (const CellId& leaf : leaves) {
-        if (next < which.size() && leaf.coords == which[next].coords &&
-            leaf.depth == which[next].depth) {
-            OctreeLeaves& subtree = subtrees[next++];
-            result.insert(result.end(), subtree.leaves.begin(), subtree.leaves.end());
-            added.insert(added.end(), subtree.leaves.begin(), subtree.leaves.end());
-            values.merge(subtree.known_values);
-            unresolved += subtree.unresolved;
+    std::vector<CellState> states(which.size());
+    for (const FrontierCell& f : frontier) {
+        if (next < which.size() && f.cell == which[next]) states[next++] = f.state;
+    }
+    workers.for_each(which.size(), [&](std::size_t i, CountingEvaluator& evaluator) {
+        if (budget.cancelled()) return;
+        if (states[i] == CellState::Pending || preview) {
+            for (int octant = 0; octant < 8; ++octant)
+                subtrees[i].push_back({which[i].child(octant), CellState::Pending});
         } else {
-            result.push_back(leaf);
+            subtrees[i] = split_settled(evaluator, lattice, settings, which[i], values,
+                                        evaluated[i], budget);
+        }
+    });
+    std::vector<FrontierCell> result;
+    next = 0;
+    for (const FrontierCell& f : frontier) {
+        if (next < which.size() && f.cell == which[next]) {
+            const std::vector<FrontierCell>& subtree = subtrees[next];
+            result.insert(result.end(), subtree.begin(), subtree.end());
+            for (const FrontierCell& s : subtree) added.push_back(s.cell);
+            values.merge(evaluated[next]);
+            ++next;
+        } else {
+            result.push_back(f);
         }
     }
     return result;
@@ -194,7 +215,7 @@ std::vector<CellId> split_leaves(WorkerPool& workers, const Lattice& lattice,
 
 /// The leaves for which `predicate` holds, in order (evaluated in parallel).
 template <typename Predicate>
-std::vector<CellId> select(WorkerPool& workers, const std::vector<CellId>& leaves,
+std::vector<CellId> select(EvaluatorPool& workers, const std::vector<CellId>& leaves,
                            const Predicate& predicate) {
     std::vector<std::uint8_t> chosen(leaves.size());
     workers.for_each(task_count(leaves.size(), kCellsPerTask), [&](std::size_t task, auto&) {
@@ -214,8 +235,8 @@ struct CrossingRoots {
     std::vector<EdgeRoot> roots;
 };
 
-CrossingRoots find_roots(WorkerPool& workers, const Lattice& lattice, const ValueMap& values,
-                         const std::vector<LeafMeshes>& parts) {
+CrossingRoots find_roots(EvaluatorPool& workers, const Lattice& lattice, const ValueMap& values,
+                         const std::vector<LeafMeshes>& parts, const WorkBudget& budget) {
     CrossingRoots result;
     for (const LeafMeshes& part : parts) {
         for (const auto& triangle : part.triangles) {
@@ -227,15 +248,15 @@ CrossingRoots find_roots(WorkerPool& workers, const Lattice& lattice, const Valu
     std::sort(result.keys.begin(), result.keys.end());
     result.keys.erase(std::unique(result.keys.begin(), result.keys.end()), result.keys.end());
     result.roots.resize(result.keys.size());
-    workers.for_each(task_count(result.keys.size(), kEdgesPerTask),
-                     [&](std::size_t task, CountingEvaluator& evaluator) {
-                         const std::size_t end =
-                             std::min(result.keys.size(), (task + 1) * kEdgesPerTask);
-                         for (std::size_t i = task * kEdgesPerTask; i < end; ++i) {
-                             result.roots[i] = find_edge_root(
-                                 evaluator, crossing_segment(values, lattice, result.keys[i]));
-                         }
-                     });
+    workers.for_each(
+        task_count(result.keys.size(), kEdgesPerTask),
+        [&](std::size_t task, CountingEvaluator& evaluator) {
+            const std::size_t end = std::min(result.keys.size(), (task + 1) * kEdgesPerTask);
+            for (std::size_t i = task * kEdgesPerTask; i < end && !budget.cancelled(); ++i) {
+                result.roots[i] =
+                    find_edge_root(evaluator, crossing_segment(values, lattice, result.keys[i]));
+            }
+        });
     return result;
 }
 
@@ -250,6 +271,8 @@ Mesh assemble(const CrossingRoots& crossings, const std::vector<LeafMeshes>& par
         id[i] = static_cast<std::uint32_t>(mesh.positions.size());
         mesh.positions.push_back(crossings.roots[i].position);
         mesh.normals.push_back(unit_or_zero(crossings.roots[i].gradient));
+        const double norm = glm::length(crossings.roots[i].gradient);
+        mesh.gradient_norms.push_back(std::isfinite(norm) ? norm : 0.0);
     }
     for (const LeafMeshes& part : parts) {
         const auto offset = static_cast<std::uint32_t>(mesh.positions.size());
@@ -271,6 +294,8 @@ Mesh assemble(const CrossingRoots& crossings, const std::vector<LeafMeshes>& par
                               part.extra_positions.end());
         mesh.normals.insert(mesh.normals.end(), part.extra_normals.begin(),
                             part.extra_normals.end());
+        mesh.gradient_norms.insert(mesh.gradient_norms.end(), part.extra_gradient_norms.begin(),
+                                   part.extra_gradient_norms.end());
     }
     return mesh;
 }
@@ -287,87 +312,200 @@ std::vector<std::uint8_t> box_faces(const Mesh& mesh, const Box& box) {
     return faces;
 }
 
+/// The mesh of a frontier (steps 2 to 6 of the file comment).
+class FrontierMesher {
+  public:
+    FrontierMesher(EvaluatorPool& workers, const Lattice& lattice, const OctreeSettings& settings,
+                   ValueMap& values, const WorkBudget& budget)
+        : workers_(workers),
+          lattice_(lattice),
+          settings_(settings),
+          values_(values),
+          budget_(budget) {}
+
+    PolygonizeResult run(std::vector<FrontierCell> frontier) {
+        frontier_ = std::move(frontier);
+        preview_ = std::any_of(frontier_.begin(), frontier_.end(), [](const FrontierCell& f) {
+            return f.state == CellState::Pending;
+        });
+        leaves_ = cells_of(frontier_);
+        finest_ = deepest(frontier_);
+        fresh_ = leaves_;
+        unlocated_ = leaves_;
+        std::vector<LeafMeshes> parts = mesh_leaves();
+        PolygonizeResult result;
+        PolygonizeStats& stats = result.stats;
+        stats.cells = leaves_.size();
+        stats.depth = finest_;
+        for (const FrontierCell& f : frontier_) {
+            stats.unresolved_cells += f.state != CellState::Leaf;
+            stats.pending_cells += f.state == CellState::Pending;
+        }
+        if (budget_.cancelled()) return result;
+        result.mesh = assemble(find_roots(workers_, lattice_, values_, parts, budget_), parts);
+        if (budget_.cancelled()) return result;
+        const glm::dvec3 step = lattice_.box().size() / std::ldexp(1.0, stats.depth);
+        const ThinTriangleSettings cleanup{kMinEdgeFraction * std::min({step.x, step.y, step.z}),
+                                           kMinQuality};
+        const ThinTriangleReport report =
+            remove_thin_triangles(result.mesh, box_faces(result.mesh, lattice_.box()), cleanup);
+        stats.collapses = report.collapses;
+        stats.flips = report.flips;
+        build_adjacency(result.mesh);
+        return result;
+    }
+
+  private:
+    /// Grades the frontier, then meshes every leaf; splits the leaves whose faces do not match
+    /// their finer neighbours, and again, until all match (leaves of equal size always do, so
+    /// this ends).
+    std::vector<LeafMeshes> mesh_leaves() {
+        std::vector<LeafMeshes> parts;
+        while (!budget_.cancelled()) {
+            evaluate_corners(workers_, lattice_, fresh_, values_, budget_);
+            if (budget_.cancelled()) break;  // corners are missing: nothing below may run
+            fresh_.clear();
+            const LeafIndex index(leaves_);
+            const LeafMeshingInput input{lattice_, values_, crossings_, index};
+            const std::vector<CellId> ungraded = select(
+                workers_, leaves_, [&](const CellId& leaf) { return needs_grading(input, leaf); });
+            if (!ungraded.empty()) {
+                split(ungraded);
+                continue;
+            }
+            locate_crossings(workers_, lattice_, unlocated_, finest_, values_, crossings_, budget_);
+            if (budget_.cancelled()) break;
+            unlocated_.clear();
+            parts.assign(task_count(leaves_.size(), kCellsPerTask), {});
+            workers_.for_each(parts.size(), [&](std::size_t task, CountingEvaluator& evaluator) {
+                const std::size_t end = std::min(leaves_.size(), (task + 1) * kCellsPerTask);
+                for (std::size_t i = task * kCellsPerTask; i < end && !budget_.cancelled(); ++i)
+                    mesh_leaf(evaluator, input, leaves_[i], parts[task]);
+            });
+            std::vector<CellId> unmatched;
+            for (const LeafMeshes& part : parts) {
+                unmatched.insert(unmatched.end(), part.unmatched.begin(), part.unmatched.end());
+            }
+            if (unmatched.empty() || budget_.cancelled()) break;
+            split(unmatched);
+        }
+        return parts;
+    }
+
+    void split(const std::vector<CellId>& which) {
+        const std::size_t before = fresh_.size();
+        frontier_ = split_cells(workers_, lattice_, settings_, frontier_, which, preview_, values_,
+                                fresh_, budget_);
+        leaves_ = cells_of(frontier_);
+        const int finest = deepest(frontier_);
+        if (finest != finest_) {
+            // Crossings are named by steps of the finest leaf: all are located again.
+            finest_ = finest;
+            crossings_.clear();
+            unlocated_ = leaves_;
+        } else {
+            unlocated_.insert(unlocated_.end(), fresh_.begin() + before, fresh_.end());
+        }
+    }
+
+    EvaluatorPool& workers_;
+    const Lattice& lattice_;
+    const OctreeSettings& settings_;
+    ValueMap& values_;
+    const WorkBudget& budget_;
+    std::vector<FrontierCell> frontier_;
+    bool preview_ = false;  // some cell is pending: the octree is unfinished
+    std::vector<CellId> leaves_;
+    int finest_ = 0;
+    std::unordered_map<std::uint64_t, CrossingKey> crossings_;
+    std::vector<CellId> fresh_;      // leaves whose corners are not evaluated yet
+    std::vector<CellId> unlocated_;  // leaves whose crossings are not located yet
+};
+
 }  // namespace
 
-PolygonizeResult polygonize(const Field& field, const PolygonizeSettings& settings) {
-    validate(settings);
-    const auto start = std::chrono::steady_clock::now();
-    PolygonizeResult result;
-    PolygonizeStats& stats = result.stats;
-    WorkerPool workers(field, thread_count(settings.threads));
-    const Lattice lattice(settings.box, settings.max_depth);
-    auto finish = [&] {
-        stats.evaluations = workers.point_evaluations();
-        stats.interval_evaluations = workers.interval_evaluations();
-        stats.cancelled = is_cancelled(settings);
-        if (stats.cancelled) result.mesh = Mesh{};
-        stats.triangles = result.mesh.triangle_count();
-        stats.vertices = result.mesh.vertex_count();
-        stats.time_ms =
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                .count();
-        return std::move(result);
-    };
-
-    const OctreeSettings octree_settings{settings.min_depth, settings.max_depth, settings.cancel};
-    OctreeLeaves octree = find_leaves(workers, lattice, octree_settings);
-    stats.unresolved_cells = octree.unresolved;
-    std::vector<CellId> leaves = std::move(octree.leaves);
-    ValueMap values = std::move(octree.known_values);
-    std::unordered_map<std::uint64_t, CrossingKey> crossings;
-    std::vector<LeafMeshes> parts;
-    std::vector<CellId> fresh = leaves;      // leaves whose corners are not evaluated yet
-    std::vector<CellId> unlocated = leaves;  // leaves whose crossings are not located yet
-    auto split = [&](const std::vector<CellId>& which) {
-        const std::size_t before = fresh.size();
-        leaves = split_leaves(workers, lattice, octree_settings, leaves, which, values,
-                              stats.unresolved_cells, fresh);
-        unlocated.insert(unlocated.end(), fresh.begin() + before, fresh.end());
-    };
-    // Grade the octree along the surface, then mesh every leaf; split the leaves whose faces do
-    // not match their finer neighbours, and again, until all match (leaves of equal size always
-    // do, so this ends).
-    while (!is_cancelled(settings)) {
-        evaluate_corners(workers, lattice, fresh, values);
-        fresh.clear();
-        const LeafIndex index(leaves);
-        const LeafMeshingInput input{lattice, values, crossings, index};
-        const std::vector<CellId> ungraded =
-            select(workers, leaves, [&](const CellId& leaf) { return needs_grading(input, leaf); });
-        if (!ungraded.empty()) {
-            split(ungraded);
-            continue;
+void validate(const PolygonizeSettings& s) {
+    for (int axis = 0; axis < 3; ++axis) {
+        if (!std::isfinite(s.box.lo[axis]) || !std::isfinite(s.box.hi[axis]) ||
+            !(s.box.lo[axis] < s.box.hi[axis])) {
+            throw std::invalid_argument(
+                "the meshing box must be finite with lo < hi on every axis");
         }
-        locate_crossings(workers, lattice, unlocated, values, crossings);
-        unlocated.clear();
-        parts.assign(task_count(leaves.size(), kCellsPerTask), {});
-        workers.for_each(parts.size(), [&](std::size_t task, CountingEvaluator& evaluator) {
-            const std::size_t end = std::min(leaves.size(), (task + 1) * kCellsPerTask);
-            for (std::size_t i = task * kCellsPerTask; i < end; ++i) {
-                mesh_leaf(evaluator, input, leaves[i], parts[task]);
-            }
-        });
-        std::vector<CellId> unmatched;
-        for (const LeafMeshes& part : parts) {
-            unmatched.insert(unmatched.end(), part.unmatched.begin(), part.unmatched.end());
-        }
-        if (unmatched.empty()) break;
-        split(unmatched);
     }
-    stats.cells = leaves.size();
-    for (const CellId& leaf : leaves) stats.depth = std::max(stats.depth, leaf.depth);
-    if (is_cancelled(settings)) return finish();
+    if (s.min_depth < 0 || s.max_depth > kMaxOctreeDepth || s.min_depth > s.max_depth) {
+        throw std::invalid_argument("octree depths must satisfy 0 <= min <= max <= " +
+                                    std::to_string(kMaxOctreeDepth));
+    }
+    if (s.feature_levels < 0) throw std::invalid_argument("feature_levels must be >= 0");
+    if (s.max_cells < 8) throw std::invalid_argument("max_cells must be at least 8");
+    if (s.threads < 0 || s.threads > kMaxThreads) {
+        throw std::invalid_argument("threads must be between 0 (all cores) and " +
+                                    std::to_string(kMaxThreads));
+    }
+}
 
-    result.mesh = assemble(find_roots(workers, lattice, values, parts), parts);
-    const glm::dvec3 step = lattice.box().size() / std::ldexp(1.0, stats.depth);
-    const ThinTriangleSettings cleanup{kMinEdgeFraction * std::min({step.x, step.y, step.z}),
-                                       kMinQuality};
-    const ThinTriangleReport report =
-        remove_thin_triangles(result.mesh, box_faces(result.mesh, settings.box), cleanup);
-    stats.collapses = report.collapses;
-    stats.flips = report.flips;
-    build_adjacency(result.mesh);
-    return finish();
+namespace {
+const PolygonizeSettings& validated(const PolygonizeSettings& settings) {
+    validate(settings);
+    return settings;
+}
+
+const std::shared_ptr<const Field>& non_null(const std::shared_ptr<const Field>& field) {
+    if (!field) throw std::invalid_argument("Polygonizer: null field");
+    return field;
+}
+}  // namespace
+
+Polygonizer::Polygonizer(std::shared_ptr<const Field> field, const PolygonizeSettings& settings)
+    : field_(non_null(field)),
+      settings_(validated(settings)),
+      pool_(*field_, thread_count(settings.threads)),
+      lattice_(settings.box, kMaxOctreeDepth),
+      octree_(lattice_, octree_settings(settings)) {}
+
+void Polygonizer::advance(const WorkBudget& budget, std::size_t max_frontier) {
+    octree_.advance(pool_, values_, budget, max_frontier);
+}
+
+PolygonizeResult Polygonizer::mesh(const WorkBudget& budget) {
+    const auto start = std::chrono::steady_clock::now();
+    const std::size_t points_before = pool_.point_evaluations();
+    const std::size_t intervals_before = pool_.interval_evaluations();
+    PolygonizeResult result;
+    if (octree_.found_region()) {
+        result.stats.region_cells = octree_.counts().regions;
+    } else {
+        FrontierMesher mesher(pool_, lattice_, octree_.settings(), values_, budget);
+        result = mesher.run(octree_.frontier());
+    }
+    PolygonizeStats& stats = result.stats;
+    stats.cancelled = budget.cancelled();
+    if (stats.cancelled) result.mesh = Mesh{};
+    stats.evaluations = pool_.point_evaluations() - points_before;
+    stats.interval_evaluations = pool_.interval_evaluations() - intervals_before;
+    stats.triangles = result.mesh.triangle_count();
+    stats.vertices = result.mesh.vertex_count();
+    stats.time_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return result;
+}
+
+PolygonizeResult polygonize(const Field& field, const PolygonizeSettings& settings) {
+    const auto start = std::chrono::steady_clock::now();
+    // Not owned: the field outlives this call.
+    Polygonizer polygonizer(std::shared_ptr<const Field>(&field, [](const Field*) {}), settings);
+    const WorkBudget budget(settings.cancel);
+    polygonizer.advance(budget);
+    PolygonizeResult result = polygonizer.mesh(budget);
+    result.stats.evaluations = polygonizer.evaluations();
+    result.stats.interval_evaluations = polygonizer.interval_evaluations();
+    result.stats.cancelled = budget.cancelled();
+    if (result.stats.cancelled) result.mesh = Mesh{};
+    result.stats.triangles = result.mesh.triangle_count();
+    result.stats.vertices = result.mesh.vertex_count();
+    result.stats.time_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return result;
 }
 
 }  // namespace isomesh

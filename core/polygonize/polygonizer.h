@@ -1,13 +1,22 @@
 // Phase 1 of the algorithm (thesis 3.3.2): a crude but topologically correct mesh of the surface
 // f = 0 inside a box, from an octree and Marching Cubes 33, with every vertex on the surface.
 // This is the mesh that progressive refinement (refine/) starts from.
+//
+// Two ways in: polygonize() runs phase 1 to the end and returns its mesh; a Polygonizer does the
+// same work a slice at a time (classify some cells, then mesh whatever the octree holds so far),
+// so that a first mesh can leave within milliseconds whatever the function, and sharper ones
+// follow (progressive/pipeline.h).
 #pragma once
 
 #include <atomic>
 #include <cstddef>
+#include <memory>
 
 #include "eval/evaluator.h"
 #include "mesh/mesh.h"
+#include "polygonize/evaluator_pool.h"
+#include "polygonize/octree.h"
+#include "work/work_budget.h"
 
 namespace isomesh {
 
@@ -20,6 +29,11 @@ struct PolygonizeSettings {
     /// to max_depth. 0 <= min_depth <= max_depth <= 16 (kMaxOctreeDepth).
     int min_depth = 4;
     int max_depth = 9;
+    /// Levels below max_depth where cells that may hide a small feature (a critical point of f:
+    /// a tiny closed component, a bubble) keep being split (octree.h), up to depth 16. >= 0.
+    int feature_levels = 3;
+    /// The most octree cells kept (a memory bound; octree.h).
+    std::size_t max_cells = 2'000'000;
     /// Worker threads; 0 = one per hardware thread. The output does not depend on it.
     int threads = 0;
     /// Checked regularly: when it becomes true, polygonize returns early with an empty mesh and
@@ -31,7 +45,11 @@ struct PolygonizeStats {
     std::size_t evaluations = 0;           ///< point evaluations of f (value, or with gradient)
     std::size_t interval_evaluations = 0;  ///< interval evaluations (with or without gradient)
     std::size_t cells = 0;                 ///< octree leaves meshed
-    std::size_t unresolved_cells = 0;      ///< octree leaves accepted at max_depth unproven
+    /// Leaves meshed without the topology guarantee: accepted at the deepest level unproven, or
+    /// not yet classified (a mesh of an unfinished octree).
+    std::size_t unresolved_cells = 0;
+    std::size_t pending_cells = 0;  ///< of those, cells not yet classified
+    std::size_t region_cells = 0;   ///< cells on which f is zero everywhere (no surface: octree.h)
     std::size_t triangles = 0;
     std::size_t vertices = 0;
     std::size_t collapses = 0;  ///< edge collapses of the thin-triangle cleanup
@@ -39,6 +57,9 @@ struct PolygonizeStats {
     double time_ms = 0.0;
     int depth = 0;  ///< the depth of the deepest leaf
     bool cancelled = false;
+
+    /// Every cell was classified and met the leaf conditions: the mesh has the surface's topology.
+    bool certified() const { return unresolved_cells == 0 && region_cells == 0; }
 };
 
 struct PolygonizeResult {
@@ -46,7 +67,45 @@ struct PolygonizeResult {
     PolygonizeStats stats;
 };
 
-/// Meshes the surface f = 0 of `field` inside settings.box.
+/// Throws std::invalid_argument (saying what is wrong) when settings are out of range.
+void validate(const PolygonizeSettings& settings);
+
+/// Phase 1 a slice at a time. Not thread-safe; its work runs on its own evaluator pool.
+class Polygonizer {
+  public:
+    /// Throws std::invalid_argument for invalid settings or a null field.
+    Polygonizer(std::shared_ptr<const Field> field, const PolygonizeSettings& settings);
+
+    /// Classifies octree cells, the largest first, until all are classified, a region where f
+    /// is zero is found, the budget is exhausted, or the octree's frontier holds about
+    /// `max_frontier` cells (a first mesh meant to be quick stops there).
+    void advance(const WorkBudget& budget, std::size_t max_frontier = ~std::size_t{0});
+    /// All cells are classified (or a region was found): mesh() is phase 1's final mesh.
+    bool complete() const { return octree_.complete() || octree_.found_region(); }
+    /// Stops the classification for good: pending cells become unresolved.
+    void settle() { octree_.settle_pending(); }
+
+    /// The mesh of the octree as it stands (see polygonize()); pending cells are meshed from their
+    /// corners like leaves, without the guarantee. Runs to its end unless the budget is cancelled
+    /// (then the mesh is empty and stats.cancelled set); its time limit is not checked.
+    PolygonizeResult mesh(const WorkBudget& budget);
+
+    const OctreeCounts& counts() const { return octree_.counts(); }
+    /// Evaluations made so far, by every worker.
+    std::size_t evaluations() const { return pool_.point_evaluations(); }
+    std::size_t interval_evaluations() const { return pool_.interval_evaluations(); }
+    const PolygonizeSettings& settings() const { return settings_; }
+
+  private:
+    std::shared_ptr<const Field> field_;
+    PolygonizeSettings settings_;
+    EvaluatorPool pool_;
+    Lattice lattice_;
+    Octree octree_;
+    ValueMap values_;
+};
+
+/// Meshes the surface f = 0 of `field` inside settings.box: Polygonizer run to the end.
 ///
 /// The output mesh (see mesh.h for the invariants) has its vertices on the surface (found by root
 /// finding along lattice edges with the gradient, |f| / |grad f| at rounding level), unit gradient
@@ -55,7 +114,8 @@ struct PolygonizeResult {
 /// box (or ends at a pole or at the border of f's domain). Sign changes of f that are not roots
 /// (poles such as 1/x = 0, jumps) produce no surface. Cells are as small as the surface's
 /// topology needs where it needs it (octree.h), and cells of different sizes meet without cracks
-/// (leaf_mesher.h). Identical for every thread count.
+/// (leaf_mesher.h). Where f is zero on a whole cell the equation holds on a region and the result
+/// is empty, with stats.region_cells > 0. Identical for every thread count.
 ///
 /// Throws std::invalid_argument for an invalid box or depths; exceptions from the field's
 /// evaluators are passed on.

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <span>
 
+#include "mesh/edge_collapse.h"
 #include "mesh/mesh.h"
 
 namespace isomesh {
@@ -32,24 +33,15 @@ struct ThinTriangleReport {
 /// Removes thin triangles from `mesh` (positions, normals, triangles; adjacency is not kept, so
 /// neighbours and base_edge are cleared) and compacts it, keeping the order of what remains.
 ///
-/// An edge u-v collapses by moving v onto u, so every remaining vertex keeps its position (on the
-/// surface) and its normal. A collapse is refused when it would change the topology (the link
-/// condition of Dey, Edelsbrunner, Guha & Nekhayev, "Topology preserving edge contraction", 1999:
-/// the common neighbours of u and v are exactly the third vertices of the triangles on u-v; and
-/// no interior edge between two boundary vertices), when v lies on a face of the meshing box that
-/// u does not (`box_faces[v]`: bit 2 * axis + side), so the boundary stays on the box, or when a
-/// triangle around v would flip over or become degenerate. A cap (a triangle with an angle above
-/// 120 degrees) is first tried with a flip of its longest edge.
-/// Several vertices at one point (where the surface runs through a lattice corner) collapse one
-/// after the other; a triangle that was degenerate must come out facing the way the normals at
-/// its corners do.
+/// Collapses are mesh/edge_collapse.h's: an edge u-v collapses by moving v onto u, so every
+/// remaining vertex keeps its position (on the surface) and its normal, and only where the
+/// topology, the boundary on the box faces (`box_faces[v]`: bit 2 * axis + side) and every
+/// triangle's orientation are kept. A cap (a triangle with an angle above 120 degrees) is first
+/// tried with a flip of its longest edge.
 /// Deterministic: triangles are visited in index order, then those whose shape changed.
 /// Preconditions: mesh manifold and consistently oriented; one normal per vertex (the surface's,
 /// zero where unknown); box_faces.size() == vertex_count().
 ThinTriangleReport remove_thin_triangles(Mesh& mesh, std::span<const std::uint8_t> box_faces,
                                          const ThinTriangleSettings& settings);
-
-/// 4 sqrt(3) area / (sum of squared edge lengths) of the triangle a, b, c.
-double triangle_quality(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c);
 
 }  // namespace isomesh

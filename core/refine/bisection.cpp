@@ -35,6 +35,44 @@ bool Refiner::Impl::plan_split(std::uint32_t t, SplitPlan& plan) {
     }
 }
 
+bool Refiner::Impl::folds(std::uint32_t t, const glm::dvec3& m) const {
+    if (t == kNone) return false;
+    const Triangle& T = triangles_[t];
+    const glm::dvec3 a = position(t, T.base), b = position(t, T.base + 1),
+                     c = position(t, T.base + 2);
+    const glm::dvec3 parent = glm::cross(b - a, c - a);
+    for (const auto& [p, q] : {std::pair{a, m}, std::pair{m, b}}) {
+        const glm::dvec3 child = glm::cross(q - p, c - p);
+        const double longest =
+            std::max({glm::dot(q - p, q - p), glm::dot(c - q, c - q), glm::dot(p - c, p - c)});
+        // Flipped against the parent, or of zero area (|cross| <= 1e-14 longest^2).
+        if (!(glm::dot(child, parent) > 0.0) || glm::length(child) <= 1e-14 * longest) return true;
+    }
+    return false;
+}
+
+bool Refiner::Impl::prepare(const SplitPlan& plan) {
+    ensure_candidates(plan.chain);
+    bool ok = true;
+    for (std::size_t i = 0; i < plan.chain.size(); ++i) {
+        const std::uint32_t t = plan.chain[i];
+        Triangle& T = triangles_[t];
+        // The split vertex must not fold the children over (the surface turns sharply between
+        // the base edge's ends) nor make one of zero area.
+        const std::uint32_t partner = i + 1 == plan.chain.size() ? plan.partner : kNone;
+        if (!T.candidate_refused && (folds(t, T.candidate) || folds(partner, T.candidate)))
+            T.candidate_refused = true;
+        if (!T.candidate_refused) continue;
+        ok = false;
+        ++counters_.refused_vertices;
+        if (split_queue_->contains(t)) {  // kept, unsplit, until the function changes
+            split_queue_->remove(t);
+            blocked_queue_->insert(t, triangles_[t].error);
+        }
+    }
+    return ok;
+}
+
 void Refiner::Impl::execute(const SplitPlan& plan) {
     // Bisect from the far end of the chain back to the triangle that asked: after chain[i + 1] is
     // bisected, its child across chain[i]'s base edge has that edge as its own base edge.
@@ -73,11 +111,11 @@ void Refiner::Impl::bisect(std::uint32_t t, std::uint32_t n) {
         M.normal = T.candidate_normal;
         M.gradient_norm = T.candidate_gradient_norm;
         M.on_surface = T.candidate_on_surface;
+        assert(M.on_surface && !T.candidate_refused);  // prepare() refused the plan otherwise
         M.scale = base_length(t);
         M.version = version_;
         M.fixed_axis = n == kNone ? vertices_[T.v[T.base]].fixed_axis : -1;
         M.alive = true;
-        if (!M.on_surface) ++counters_.failed_projections;
         delta_.add_vertex(delta_vertex(m));
     }
     remove_leaf(t);

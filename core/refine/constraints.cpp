@@ -120,6 +120,30 @@ bool Constraint::over_limit(const MeshStats& stats) const {
     }
 }
 
+std::optional<std::size_t> Constraint::triangle_limit() const {
+    const Node& n = *node_;
+    std::optional<std::size_t> limit;
+    switch (n.kind) {
+        case Kind::TriangleBudget:
+            return static_cast<std::size_t>(n.bound);
+        case Kind::AllOf:  // any part's cap applies
+            for (const Constraint& c : n.parts) {
+                const auto part = c.triangle_limit();
+                if (part) limit = limit ? std::min(*limit, *part) : *part;
+            }
+            return limit;
+        case Kind::AnyOf:  // over the limit only when every part is
+            for (const Constraint& c : n.parts) {
+                const auto part = c.triangle_limit();
+                if (!part) return std::nullopt;
+                limit = limit ? std::max(*limit, *part) : *part;
+            }
+            return limit;
+        default:
+            return std::nullopt;
+    }
+}
+
 std::string Constraint::describe() const {
     const Node& n = *node_;
     std::ostringstream out;

@@ -16,6 +16,7 @@
 #include <cstddef>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,9 @@ class Constraint {
 
     bool wants_refinement(const MeshStats& stats) const;
     bool over_limit(const MeshStats& stats) const;
+    /// The largest triangle count that is not over_limit (whatever the errors), or nullopt when
+    /// there is no such cap.
+    std::optional<std::size_t> triangle_limit() const;
     /// A readable form, e.g. "(triangles < 1000 and max_error > 0.01)".
     std::string describe() const;
 

@@ -89,6 +89,7 @@ std::size_t Refiner::Impl::try_exchange(const MeshStats& stats) {
         return found;
     });
     if (!found) return 0;
+    if (!prepare(plan_)) return 1;
     for (std::uint32_t record : exchange_merges_) merge(record);
     execute(plan_);
     ++counters_.swaps;
@@ -98,6 +99,7 @@ std::size_t Refiner::Impl::try_exchange(const MeshStats& stats) {
 std::size_t Refiner::Impl::act() {
     const MeshStats current = stats();
     if (constraint_.wants_refinement(current) && find_split(current, plan_)) {
+        if (!prepare(plan_)) return 1;  // no vertex for it: another split next time
         execute(plan_);
         return plan_.bisections();
     }

@@ -29,6 +29,7 @@
 #include <chrono>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <glm/common.hpp>
 
@@ -128,6 +129,7 @@ void Refiner::Impl::load(const Mesh& input) {
         bounds_.lo = glm::min(bounds_.lo, mesh.positions[v]);
         bounds_.hi = glm::max(bounds_.hi, mesh.positions[v]);
     }
+    const std::vector<ValueGradient> gradients = missing_gradients(mesh);
     for (std::uint32_t v = 0; v < mesh.positions.size(); ++v) {
         if (slot_of[v] == kNone) continue;
         const std::uint32_t slot = vertices_.allocate();
@@ -135,10 +137,14 @@ void Refiner::Impl::load(const Mesh& input) {
         Vertex& V = vertices_[slot];
         V.id = next_vertex_id_++;
         V.position = mesh.positions[v];
-        const glm::dvec3 gradient = evaluator_->value_gradient(V.position).gradient;
         V.normal = mesh.normals.empty() ? glm::dvec3(0.0) : mesh.normals[v];
-        if (V.normal == glm::dvec3(0.0) || !finite(V.normal)) V.normal = unit_or_zero(gradient);
-        V.gradient_norm = finite(gradient) ? glm::length(gradient) : 0.0;
+        if (gradients.empty()) {
+            V.gradient_norm = mesh.gradient_norms[v];
+        } else {
+            const glm::dvec3& gradient = gradients[v].gradient;
+            if (V.normal == glm::dvec3(0.0) || !finite(V.normal)) V.normal = unit_or_zero(gradient);
+            V.gradient_norm = finite(gradient) ? glm::length(gradient) : 0.0;
+        }
         V.scale = std::numeric_limits<double>::infinity();
         V.version = version_;
         V.alive = true;
@@ -175,6 +181,26 @@ void Refiner::Impl::load(const Mesh& input) {
     root_edge_length_ = mesh.triangles.empty() ? 0.0 : edge_sum / (3.0 * mesh.triangles.size());
     ensure_errors(tri_slot);
     for (std::uint32_t slot : tri_slot) add_leaf(slot);
+}
+
+std::vector<ValueGradient> Refiner::Impl::missing_gradients(const Mesh& mesh) {
+    // Phase 1 found every vertex with the gradient: nothing to evaluate when it passed on the
+    // norms and every normal.
+    const bool known =
+        mesh.gradient_norms.size() == mesh.positions.size() &&
+        mesh.normals.size() == mesh.positions.size() &&
+        std::all_of(mesh.normals.begin(), mesh.normals.end(),
+                    [](const glm::dvec3& n) { return n != glm::dvec3(0.0) && finite(n); });
+    if (known) return {};
+    std::vector<double> x, y, z;
+    for (std::uint32_t v = 0; v < mesh.positions.size(); ++v) {
+        x.push_back(mesh.positions[v].x);
+        y.push_back(mesh.positions[v].y);
+        z.push_back(mesh.positions[v].z);
+    }
+    std::vector<ValueGradient> gradients(mesh.positions.size());
+    evaluator_->value_gradients({x, y, z}, gradients);
+    return gradients;
 }
 
 void Refiner::Impl::clear_all_into_delta() {
@@ -218,25 +244,18 @@ void Refiner::Impl::replace_neighbour(std::uint32_t t, std::uint32_t old_nb, std
 // Steps and views
 
 StepResult Refiner::Impl::step(const StepBudget& budget, bool take) {
-    using Clock = std::chrono::steady_clock;
-    const auto start = Clock::now();
     const RefineCounters before = counters_;
     StepResult result;
     std::size_t operations = 0;
     while (operations < budget.operations) {
-        if (settings_.cancel && settings_.cancel->load(std::memory_order_relaxed)) {
+        if ((settings_.cancel && settings_.cancel->load(std::memory_order_relaxed)) ||
+            budget.work.cancelled()) {
             result.cancelled = true;
             break;
         }
         // A step makes progress whatever its time budget: the first operation is always done.
-        if (budget.microseconds > 0 && operations > 0 &&
-            Clock::now() - start >= std::chrono::microseconds(budget.microseconds))
-            break;
-        if (restart_pending_) {
-            restart();
-            result.restarted = true;
-            ++operations;
-        } else if (refresh_pending()) {
+        if (operations > 0 && budget.work.timed() && budget.work.exhausted()) break;
+        if (refresh_pending()) {
             const std::size_t done = refresh_some(budget.operations - operations);
             result.refreshed += done;
             operations += done;
@@ -247,6 +266,7 @@ StepResult Refiner::Impl::step(const StepBudget& budget, bool take) {
             break;
         }
     }
+    result.restarted = std::exchange(restarted_, false);
     result.splits = counters_.splits - before.splits;
     result.merges = counters_.merges - before.merges;
     if (take) result.delta = delta_.take();
@@ -318,17 +338,6 @@ Refiner::Refiner(std::shared_ptr<const Field> field, const Mesh& first_mesh,
                  RefineSettings settings)
     : impl_(std::make_unique<Impl>(std::move(field), first_mesh, std::move(settings))) {}
 
-namespace {
-Mesh run_phase1(const std::shared_ptr<const Field>& field, const RefineSettings& settings) {
-    if (!field) throw std::invalid_argument("Refiner: null field");
-    if (!settings.phase1) throw std::invalid_argument("Refiner: no phase1 to make the first mesh");
-    return settings.phase1(*field);
-}
-}  // namespace
-
-Refiner::Refiner(std::shared_ptr<const Field> field, RefineSettings settings)
-    : Refiner(field, run_phase1(field, settings), settings) {}
-
 Refiner::~Refiner() = default;
 
 StepResult Refiner::step(const StepBudget& budget) {
@@ -337,7 +346,7 @@ StepResult Refiner::step(const StepBudget& budget) {
 
 StepResult Refiner::run_to_convergence(std::size_t operations_per_step) {
     StepResult total;
-    const StepBudget budget{operations_per_step, 0};
+    const StepBudget budget{operations_per_step, WorkBudget{}};
     for (;;) {
         const StepResult r = impl_->step(budget, false);
         total.splits += r.splits;
@@ -368,6 +377,18 @@ std::uint64_t Refiner::version() const {
 }
 bool Refiner::field_change_pending() const {
     return impl_->field_change_pending();
+}
+bool Refiner::refresh_failed() const {
+    return impl_->refresh_failed();
+}
+void Refiner::reset(const Mesh& first_mesh) {
+    impl_->reset(first_mesh);
+}
+const TopologyReport& Refiner::root_topology() const {
+    return impl_->root_topology();
+}
+std::size_t Refiner::inverted_triangles() const {
+    return impl_->inverted_triangles();
 }
 MeshStats Refiner::stats() const {
     return impl_->stats();

@@ -16,7 +16,9 @@
 // - merge: undo a split whose children are all unsplit; every phase-1 triangle is the root of its
 //   own tree of splits (the thesis's "multi-rooted tree", 3.2.3).
 // - refresh: after set_field, move every vertex onto the new surface and re-prioritise (in
-//   batches of evaluations).
+//   batches of evaluations);
+// - reset: start again from another mesh (a new phase-1 mesh: progressive/pipeline.h decides when
+//   the topology changed), with ids continuing so that the delta replaces everything.
 // The split queue orders unsplit triangles by error, largest first; the merge queue orders
 // mergeable splits by the larger error of the triangles a merge restores, smallest first (ROAM's
 // dual queues). While the constraint wants refinement the best split that does not overshoot it is
@@ -36,17 +38,21 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "eval/evaluator.h"
 #include "mesh/mesh.h"
+#include "mesh/topology.h"
 #include "refine/constraints.h"
 #include "refine/error_measures.h"
 #include "refine/mesh_delta.h"
 #include "refine/split_queue.h"
 #include "refine/surface_projection.h"
+#include "work/work_budget.h"
 
 namespace isomesh {
 
@@ -71,23 +77,26 @@ struct RefineSettings {
     /// A bound on forced splits per split (never reached on meshes whose base edges are longest
     /// edges; a guard against malformed input).
     std::size_t max_forced_chain = 4096;
-    /// Phase 1 for a new function (usually polygonize with the session's settings). When set,
-    /// set_field compares the topology (components, Euler characteristic, closed or not) of a
-    /// fresh phase-1 mesh with the current mesh's (which is its own phase-1 mesh's: splits and
-    /// merges keep it) and restarts from the fresh mesh when they differ, or when a vertex cannot
-    /// be moved onto the new surface. When empty, set_field only moves the existing vertices.
-    std::function<Mesh(const Field&)> phase1;
+    /// The meshing box: a split whose new vertex would land outside it (the surface bulging out
+    /// past a face the mesh ends on) is not made, nor one whose projection onto the surface
+    /// fails; the triangle stays as it is until the function changes. Infinite by default.
+    Box box{glm::dvec3(-std::numeric_limits<double>::infinity()),
+            glm::dvec3(std::numeric_limits<double>::infinity())};
     /// Checked between operations; step() returns early when it becomes true.
     const std::atomic<bool>* cancel = nullptr;
 };
 
 struct StepBudget {
+    StepBudget() = default;
+    StepBudget(std::size_t operations_, WorkBudget work_ = {})
+        : operations(operations_), work(std::move(work_)) {}
+
     /// Operations: bisections (a forced chain is not cut: the last split may exceed the budget),
     /// merges, and vertices or triangles refreshed after a function change.
     std::size_t operations = 1024;
-    /// Wall-clock limit in microseconds, checked between operations after the first; 0 means
-    /// none. Not deterministic.
-    std::int64_t microseconds = 0;
+    /// Time and cancellation, checked between operations after the first (a step makes progress
+    /// whatever its time). Time limits are not deterministic.
+    WorkBudget work;
 };
 
 struct StepResult {
@@ -95,7 +104,7 @@ struct StepResult {
     std::size_t splits = 0;  // bisections, forced ones included
     std::size_t merges = 0;
     std::size_t refreshed = 0;  // vertices and triangles updated for a new function
-    bool restarted = false;     // the mesh was rebuilt from a fresh phase-1 mesh
+    bool restarted = false;     // the mesh was replaced (reset): the delta removes every triangle
     bool converged = false;     // nothing left to do until the constraint or function changes
     bool cancelled = false;
 };
@@ -107,8 +116,9 @@ struct RefineCounters {
     std::size_t swaps = 0;
     std::size_t refreshed_vertices = 0;
     std::size_t refreshed_triangles = 0;
-    std::size_t failed_projections = 0;  // split vertices left at the edge midpoint
-    std::size_t failed_refreshes = 0;    // vertices that found no surface nearby after set_field
+    std::size_t refused_vertices = 0;  // splits refused: no valid vertex (on the surface, in the
+                                       // box, folding nothing) for them
+    std::size_t failed_refreshes = 0;  // vertices that found no surface nearby after set_field
     std::size_t restarts = 0;
     std::size_t refused_splits = 0;  // chains longer than max_forced_chain
 };
@@ -140,9 +150,6 @@ class Refiner {
     /// Throws std::invalid_argument when validate_refinable fails or field is null.
     /// The starting mesh is snapshot() right after construction.
     Refiner(std::shared_ptr<const Field> field, const Mesh& first_mesh, RefineSettings settings);
-    /// Runs settings.phase1 on the field for the first mesh. Throws std::invalid_argument when
-    /// settings.phase1 is empty.
-    Refiner(std::shared_ptr<const Field> field, RefineSettings settings);
     ~Refiner();
     Refiner(const Refiner&) = delete;
     Refiner& operator=(const Refiner&) = delete;
@@ -158,13 +165,26 @@ class Refiner {
 
     /// A new version of the function (new parameter values or a new tape). Vertices move onto the
     /// new surface during the following steps, coarse before fine; then the queues re-converge.
-    /// With settings.phase1, a change of topology restarts from a fresh phase-1 mesh (the next
-    /// step's delta removes every triangle and adds the new mesh). Throws on a null field.
+    /// Whether the topology stayed the same is not the refiner's to know: its owner compares a
+    /// fresh phase-1 mesh with root_topology() and calls reset() (progressive/pipeline.h).
+    /// Throws on a null field.
     void set_field(std::shared_ptr<const Field> field);
     std::uint64_t version() const;
     /// True from set_field until step() has moved every vertex onto the new surface and updated
-    /// every error (or restarted from a fresh phase-1 mesh): until then the mesh mixes versions.
+    /// every error: until then the mesh mixes versions.
     bool field_change_pending() const;
+    /// Since the last set_field, some vertex found no surface within its reach (it stayed where it
+    /// was): the mesh does not follow the new function there.
+    bool refresh_failed() const;
+    /// Starts again from `first_mesh` (as the constructor, for the current field, constraint and
+    /// version): the next step's delta removes every triangle and adds the new mesh, whose ids
+    /// continue after the old ones. Throws std::invalid_argument when validate_refinable fails.
+    void reset(const Mesh& first_mesh);
+    /// The topology of the current mesh: its phase-1 mesh's, which splits and merges keep.
+    const TopologyReport& root_topology() const;
+    /// Leaves facing against the surface: their geometric normal points away from the mean of
+    /// their corners' normals (a fold left by moving vertices onto a new surface).
+    std::size_t inverted_triangles() const;
 
     MeshStats stats() const;
     QueueEnds queue_ends() const;

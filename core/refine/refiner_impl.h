@@ -1,7 +1,7 @@
 // Private to core/refine: the state of a Refiner, shared by the files that implement it:
 // refiner.cpp (structure, steps, views), triangle_errors.cpp (candidates, errors, queue entries),
 // bisection.cpp (splits with their forced splits, merges), dual_queues.cpp (which operation comes
-// next) and function_versions.cpp (set_field). See refiner.cpp for the design.
+// next) and field_changes.cpp (set_field, reset). See refiner.cpp for the design.
 #pragma once
 
 #include <array>
@@ -51,6 +51,7 @@ struct Triangle {
     glm::dvec3 candidate_normal{0.0};
     double candidate_gradient_norm = 0.0;
     bool candidate_on_surface = false;
+    bool candidate_refused = false;  // no valid split vertex at candidate_version: not split
     std::uint64_t candidate_version = 0;
     double error = 0.0;
     std::uint64_t error_version = 0;
@@ -161,7 +162,11 @@ class Refiner::Impl {
     void set_constraint(Constraint c) { constraint_ = std::move(c); }
     const Constraint& constraint() const { return constraint_; }
     std::uint64_t version() const { return version_; }
-    bool field_change_pending() const { return restart_pending_ || refresh_pending(); }
+    bool field_change_pending() const { return refresh_pending(); }
+    bool refresh_failed() const { return refresh_failed_; }
+    void reset(const Mesh& first_mesh);
+    const TopologyReport& root_topology() const { return root_topology_; }
+    std::size_t inverted_triangles() const;
     MeshStats stats() const;
     QueueEnds queue_ends() const {
         return {split_queue_->extreme_priority(), merge_queue_->extreme_priority()};
@@ -174,6 +179,9 @@ class Refiner::Impl {
   private:
     // --- structure
     void load(const Mesh& input);
+    /// grad f at the vertices of `mesh`, in one batch; empty when the mesh brought every norm
+    /// and normal along.
+    std::vector<ValueGradient> missing_gradients(const Mesh& mesh);
     void clear_all_into_delta();
     DeltaTriangle delta_triangle(std::uint32_t t) const;
     DeltaVertex delta_vertex(std::uint32_t v) const;
@@ -187,6 +195,8 @@ class Refiner::Impl {
     /// Splittable: every edge at least min_edge_length. Splitting a triangle with a shorter edge
     /// (coincident vertices in the input) would only make more degenerate triangles.
     bool splittable(std::uint32_t t) const {
+        const Triangle& T = triangles_[t];
+        if (T.candidate_refused && T.candidate_version == version_) return false;
         for (int e = 0; e < 3; ++e)
             if (!(glm::length(position(t, e + 1) - position(t, e)) >= settings_.min_edge_length))
                 return false;
@@ -215,6 +225,11 @@ class Refiner::Impl {
 
     // --- operations
     bool plan_split(std::uint32_t t, SplitPlan& plan);
+    /// Projects the split vertices of the plan; false (and the triangles without one moved to
+    /// the blocked queue) when some has none on the surface inside the box.
+    bool prepare(const SplitPlan& plan);
+    /// Bisecting t's base edge at m would flip a child against t, or make one of zero area.
+    bool folds(std::uint32_t t, const glm::dvec3& m) const;
     void execute(const SplitPlan& plan);
     void bisect(std::uint32_t t, std::uint32_t partner);
     std::uint32_t make_child(std::uint32_t record, std::array<std::uint32_t, 3> v,
@@ -236,7 +251,6 @@ class Refiner::Impl {
     void refresh_vertices(std::span<const std::uint32_t> vertices);
     void refresh_leaves(std::span<const std::uint32_t> leaves);
     void refresh_records(std::span<const std::uint32_t> records);
-    void restart();
 
     RefineSettings settings_;
     Constraint constraint_;
@@ -275,8 +289,8 @@ class Refiner::Impl {
     RefreshStage refresh_stage_ = RefreshStage::None;
     std::vector<std::uint32_t> refresh_list_;
     std::size_t refresh_next_ = 0;
-    std::optional<Mesh> fresh_phase1_;  // the new function's phase-1 mesh, if computed
-    bool restart_pending_ = false;
+    bool refresh_failed_ = false;  // some vertex found no surface since the last set_field
+    bool restarted_ = false;       // reset() since the last step
 };
 
 }  // namespace isomesh

@@ -41,6 +41,7 @@ void Refiner::Impl::ensure_candidates(std::span<const std::uint32_t> tris) {
             T.candidate_normal = N.candidate_normal;
             T.candidate_gradient_norm = N.candidate_gradient_norm;
             T.candidate_on_surface = N.candidate_on_surface;
+            T.candidate_refused = N.candidate_refused;
             T.candidate_version = version_;
             continue;
         }
@@ -56,6 +57,7 @@ void Refiner::Impl::ensure_candidates(std::span<const std::uint32_t> tris) {
         T.candidate_normal = p.on_surface() ? p.normal : unit_or_zero(requests_[i].direction);
         T.candidate_gradient_norm = p.gradient_norm;
         T.candidate_on_surface = p.on_surface();
+        T.candidate_refused = !p.on_surface() || !settings_.box.contains(p.position);
         T.candidate_version = version_;
     }
 }

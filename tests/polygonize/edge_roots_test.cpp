@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "polygonize_support.h"
+#include "support/mesh_checks.h"
 
 namespace isomesh {
 namespace {

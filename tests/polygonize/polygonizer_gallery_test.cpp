@@ -13,7 +13,7 @@
 #include "expr/function_source.h"
 #include "mesh/topology.h"
 #include "polygonize/polygonizer.h"
-#include "polygonize_support.h"
+#include "support/mesh_checks.h"
 
 namespace isomesh {
 namespace {

@@ -13,7 +13,7 @@
 #include "eval/grid_field.h"
 #include "mesh/topology.h"
 #include "polygonize/polygonizer.h"
-#include "polygonize_support.h"
+#include "support/mesh_checks.h"
 
 namespace isomesh {
 namespace {
@@ -48,6 +48,7 @@ void expect_suite_topology(int first, int step, int min_depth, int max_depth) {
         settings.box = grid->box;
         settings.min_depth = min_depth;
         settings.max_depth = max_depth;
+        settings.feature_levels = 0;  // a sampled grid has no detail below its cells
         settings.threads = 1;
         const auto field = make_grid_field(std::move(*grid));
         const PolygonizeResult result = polygonize(*field, settings);
@@ -83,6 +84,7 @@ TEST(PolygonizerGrid, vertices_lie_on_the_interpolant) {
     settings.box = grid->box;
     settings.min_depth = 2;
     settings.max_depth = 4;
+    settings.feature_levels = 0;
     const auto field = make_grid_field(std::move(*grid));
     const PolygonizeResult result = polygonize(*field, settings);
     ASSERT_GT(result.mesh.triangle_count(), 0u);

@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <map>
 #include <thread>
+
+#include "support/grid_match.h"
 
 namespace isomesh::server::testing {
 
@@ -79,6 +82,20 @@ std::vector<std::array<std::uint32_t, 3>> canonical_triangles(const protocol::Me
     }
     std::sort(out.begin(), out.end());
     return out;
+}
+
+std::string compare_on_grid(const protocol::MeshReplica& replica, const Mesh& mesh,
+                            const protocol::QuantizationGrid& grid) {
+    Mesh got;
+    std::map<std::uint32_t, std::uint32_t> index_of;
+    for (const auto& [id, vertex] : replica.vertices()) {
+        index_of[id] = static_cast<std::uint32_t>(got.positions.size());
+        got.positions.push_back(vertex.position);
+        got.normals.push_back(vertex.normal);
+    }
+    for (const auto& [id, t] : replica.triangles())
+        got.triangles.push_back({index_of.at(t[0]), index_of.at(t[1]), index_of.at(t[2])});
+    return test::compare_on_grid(got, mesh, grid);
 }
 
 bool watertight(const protocol::MeshReplica& mesh) {

@@ -72,6 +72,13 @@ class TestConnection {
 /// same triangle compares equal whatever its wire id or starting corner), sorted.
 std::vector<std::array<std::uint32_t, 3>> canonical_triangles(const protocol::MeshReplica& mesh);
 
+/// Empty when the replica holds the same mesh as `mesh`, whatever its ids (which depend on how
+/// often a resolving phase 1 replaced the mesh): every vertex matches one of `mesh` within one
+/// step of the session's quantization grid (protocol/mesh_codec.h), and the triangles are the
+/// same, with the same orientation. Otherwise the first difference.
+std::string compare_on_grid(const protocol::MeshReplica& replica, const Mesh& mesh,
+                            const protocol::QuantizationGrid& grid);
+
 /// True when every edge of the replica's mesh is shared by exactly two triangles, with opposite
 /// directions (closed and consistently oriented).
 bool watertight(const protocol::MeshReplica& mesh);

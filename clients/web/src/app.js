@@ -1,45 +1,53 @@
-// The viewer's session logic: one connection, one session, and the user's edits turned into
-// `update` requests.
-//
-// Frames are applied a few milliseconds per animation frame (drainFrames), not on receipt.
-// Edits are coalesced: at most one update is in flight; edits made meanwhile (a slider being
-// dragged) are merged and sent when its reply arrives, so the surface follows the latest value at
-// the pace of the round trip instead of queueing every intermediate one. The state the server
-// reports (created/updated) is what the panel then shows: the parameter list, constraints, box.
+// The viewer's scene: one connection to the server, any number of surfaces (a row of the object
+// list each, with its own session), and the values they share, as GeoGebra shares them between
+// objects: the parameters (one slider per name, whatever surfaces use it), the view box and the
+// detail constraints. It turns what the user does into Surface calls and shows what the surfaces
+// report: the rows' progress and messages, the sliders, the status line.
 
 import { connect } from 'isomesh-client';
 
-import { missingParameters, parameterNames, valuesFor } from './parameters.js';
+import { NO_SURFACE_MESSAGE, EMPTY_MESSAGE, prepareEquation } from './equation_check.js';
+import { parameterNames } from './parameters.js';
+import { RECONNECT_MS, Surface } from './surface.js';
+import { MAX_SURFACES } from './url_state.js';
 
-const RECONNECT_MS = [500, 1000, 2000, 5000, 10000];
+export const PALETTE = ['#3d7fd6', '#d9553d', '#3f9e4d', '#8e5bd0', '#1f9fa5', '#c98a1b', '#d6457e', '#5f6b7a'];
+const STATUS_ORDER = ['disconnected', 'connecting', 'meshing', 'refining', 'paused', 'converged'];
 
 export class App {
   /**
-   * @param {{panel: Panel, viewer: Viewer, url: string, decoder: object, initial: object}} options
-   *   initial: {expression, parameters, box, constraints} of the first session
+   * @param {object} o
+   * @param {string} o.url the server's WebSocket URL
+   * @param {object} o.decoder a DracoMeshDecoder
+   * @param {Viewer} o.viewer
+   * @param {ObjectList} o.objects
+   * @param {SliderPanel} o.sliders
+   * @param {Panel} o.panel
+   * @param {object} o.state the scene to start with (url_state.js's shape)
    */
-  constructor({ panel, viewer, url, decoder, initial }) {
-    this.panel = panel;
-    this.viewer = viewer;
-    this.url = url;
-    this.decoder = decoder;
-    this.wanted = { ...initial, parameters: { ...(initial.parameters ?? {}) } };
+  constructor({ url, decoder, viewer, objects, sliders, panel, state }) {
+    Object.assign(this, { url, decoder, viewer, objects, sliders, panel });
     this.client = null;
-    this.session = null;
-    this.status = 'connecting';
-    this.lastError = null; // {code, message, column} of the last rejected request
-    this.errorMax = null;
-    this.pending = null; // fields of the next update
-    this.inFlight = false;
-    this.paused = false;
+    this.connection = 'connecting'; // 'connecting' | 'open' | 'disconnected'
+    this.connectionDetail = '';
     this.reconnects = 0;
-    this.framedBox = null;
-    /** The last 200 session events, for diagnostics (window.isomesh.journal). */
-    this.journal = [];
+    this.parameters = { ...(state.parameters ?? {}) };
+    this.box = state.box;
+    this.constraints = { ...(state.constraints ?? {}) };
+    this.paused = false;
+    this.rows = [];
+    this.activeRow = null;
+    /** Called when something the URL holds changed. */
+    this.onStateChange = null;
+    /** Called when the status line or the rows need redrawing (at most once per animation frame). */
+    this.onStatus = null;
+    this.refreshQueued = false;
+    for (const s of state.surfaces ?? []) this.addSurface(s);
   }
 
   async start() {
-    this.#setStatus('connecting');
+    this.connection = 'connecting';
+    this.#refresh();
     try {
       this.client = await connect(this.url, { decoder: this.decoder, deferFrames: true });
     } catch (error) {
@@ -47,258 +55,269 @@ export class App {
       return;
     }
     this.reconnects = 0;
+    this.connection = 'open';
+    this.connectionDetail = '';
     this.client.on('close', () => this.#disconnected('connection closed'));
     this.client.on('error', (error) => console.warn('isomesh:', error));
-    await this.#createSession();
+    for (const row of this.rows) row.surface.attach(this.client);
+    this.#refresh();
   }
 
-  /**
-   * Applies received frames for at most `budgetMs` (called once per animation frame, so that
-   * decoding never stalls rendering); returns true when any was applied.
-   */
-  drainFrames(budgetMs) {
-    const client = this.client;
-    if (!client || client.pendingFrames === 0) return false;
-    client.drainFrames(performance.now() + budgetMs);
-    return true;
+  /** The values every surface shares, for a new session. */
+  shared() {
+    return { parameters: this.parameters, box: this.box, constraints: this.constraints };
   }
 
-  // ---- user edits ------------------------------------------------------------------------------
+  // ---- rows ------------------------------------------------------------------------------------
 
-  setEquation(text) {
-    if (text === '') return;
-    const parameters = valuesFor(parameterNames(text), this.wanted.parameters);
-    this.wanted.expression = text;
-    Object.assign(this.wanted.parameters, parameters);
-    this.#change({ expression: text, parameters });
+  /** A new row (and surface); `focus` puts the cursor in its equation field. */
+  addSurface({ expression = '', color = null, visible = true } = {}, { focus = false } = {}) {
+    if (this.rows.length >= MAX_SURFACES) return null;
+    const used = new Set(this.rows.map((r) => r.view.color));
+    color ??= PALETTE.find((c) => !used.has(c)) ?? PALETTE[this.rows.length % PALETTE.length];
+    const prepared = expression === '' ? { ok: true, expression: '', notes: [] } : prepareEquation(expression);
+    const row = { notes: prepared.notes ?? [], localError: null, shownError: null };
+    row.view = this.objects.addRow({ expression: prepared.expression ?? expression, color, visible });
+    row.view.input.addEventListener('focus', () => (this.activeRow = row));
+    row.mesh = this.viewer.addSurface(color);
+    row.mesh.setVisible(visible);
+    row.surface = new Surface({
+      expression: prepared.ok ? prepared.expression : '',
+      shared: () => this.shared(),
+      onChange: (surface, what) => this.#surfaceChanged(row, what),
+    });
+    this.rows.push(row);
+    this.activeRow ??= row;
+    if (this.client && !this.client.closed) row.surface.attach(this.client);
+    if (focus) {
+      row.view.input.focus();
+      this.activeRow = row;
+    }
+    this.panel.setCanAdd(this.rows.length < MAX_SURFACES, `At most ${MAX_SURFACES} surfaces`);
+    this.#stateChanged();
+    return row;
   }
+
+  rowOf(view) {
+    return this.rows.find((r) => r.view === view);
+  }
+
+  async removeSurface(row) {
+    const i = this.rows.indexOf(row);
+    if (i < 0) return;
+    this.rows.splice(i, 1);
+    if (this.activeRow === row) this.activeRow = this.rows[Math.min(i, this.rows.length - 1)] ?? null;
+    this.objects.removeRow(row.view);
+    row.mesh.dispose();
+    this.panel.setCanAdd(true, '');
+    this.#updateSliders();
+    this.#stateChanged();
+    await row.surface.close();
+  }
+
+  /** The user pressed Enter in a row's equation field. */
+  submitEquation(row, text) {
+    this.activeRow = row;
+    const prepared = prepareEquation(text);
+    if (!prepared.ok) {
+      row.localError = { message: EMPTY_MESSAGE };
+      this.#refresh();
+      return;
+    }
+    row.localError = null;
+    row.notes = prepared.notes;
+    if (prepared.expression !== text.trim()) row.view.setEquation(prepared.expression);
+    for (const name of parameterNames(prepared.expression)) this.parameters[name] ??= 1; // GeoGebra's start
+    row.surface.setExpression(prepared.expression);
+    this.#updateSliders();
+    this.#stateChanged();
+  }
+
+  setColor(row, color) {
+    row.mesh.setColor(color);
+    this.#stateChanged();
+  }
+
+  setVisible(row, on) {
+    row.mesh.setVisible(on);
+    this.#stateChanged();
+  }
+
+  // ---- shared values ---------------------------------------------------------------------------
 
   setParameter(name, value) {
-    this.wanted.parameters[name] = value;
-    this.#change({ parameters: { [name]: value } });
-  }
-
-  setConstraints(constraints) {
-    this.wanted.constraints = { ...this.wanted.constraints, ...constraints };
-    this.#change({ constraints });
+    this.parameters[name] = value;
+    for (const row of this.rows) row.surface.setParameters({ [name]: value });
+    this.#stateChanged();
   }
 
   setBox(box) {
-    this.wanted.box = box;
-    this.#change({ box });
+    this.box = box;
+    this.viewer.setBox(box);
+    for (const row of this.rows) row.surface.setBox(box);
+    this.#stateChanged();
   }
 
+  setConstraints(constraints) {
+    this.constraints = { ...this.constraints, ...constraints };
+    for (const row of this.rows) row.surface.setConstraints(constraints);
+    this.#stateChanged();
+  }
+
+  /** A gallery example replaces the active row's equation, and sets its parameters and box. */
   showExample(example) {
-    this.wanted.expression = example.expression;
-    this.wanted.box = example.box;
-    Object.assign(this.wanted.parameters, example.parameters ?? {});
-    const parameters = valuesFor(parameterNames(example.expression), this.wanted.parameters);
-    this.panel.setEquation(example.expression);
-    this.framedBox = null; // aim the camera at the new box once the server accepts it
-    this.#change({ expression: example.expression, parameters, box: example.box });
+    const row = this.activeRow ?? this.rows[0] ?? this.addSurface();
+    Object.assign(this.parameters, example.parameters ?? {});
+    for (const [name, value] of Object.entries(example.parameters ?? {})) this.sliders.setValue(name, value);
+    this.box = example.box;
+    this.panel.setBox(example.box);
+    this.viewer.setBox(example.box, { frame: true });
+    for (const other of this.rows) {
+      if (other !== row) {
+        other.surface.setBox(example.box);
+        other.surface.setParameters(example.parameters ?? {});
+      }
+    }
+    row.view.setEquation(example.expression);
+    row.surface.setBox(example.box);
+    this.submitEquation(row, example.expression);
   }
 
-  async togglePause() {
-    if (!this.session) return;
+  togglePause() {
     this.paused = !this.paused;
     this.panel.setPaused(this.paused);
-    await (this.paused ? this.session.pause() : this.session.resume()).catch((e) => this.#requestFailed(e, {}));
-    this.#refreshStatus();
+    for (const row of this.rows) row.surface.setPaused(this.paused);
   }
 
-  // ---- session ---------------------------------------------------------------------------------
+  // ---- reading ---------------------------------------------------------------------------------
 
-  async #createSession() {
-    const { expression, parameters, box, constraints } = this.wanted;
-    this.#setStatus('meshing');
-    let names = parameterNames(expression);
-    for (let attempt = 0; ; ++attempt) {
-      try {
-        this.session = await this.client.create({ expression, parameters: valuesFor(names, parameters), box, constraints });
-        break;
-      } catch (error) {
-        const missing = missingParameters(error).filter((name) => !names.includes(name));
-        if (attempt === 0 && missing.length > 0) {
-          names = [...names, ...missing];
-          continue;
-        }
-        this.session = null;
-        this.#requestFailed(error, { expression });
-        return;
-      }
-    }
-    this.panel.clearError();
-    this.lastError = null;
-    this.#watch(this.session);
-    this.viewer.showSlots(this.session.mesh.slots);
-    this.#applyState(this.session.state);
-    this.#pump();
-  }
-
-  #watch(session) {
-    const note = (entry) => {
-      this.journal.push(entry);
-      if (this.journal.length > 200) this.journal.shift();
+  /** What the URL keeps (url_state.js's shape, without camera and display). */
+  state() {
+    const names = this.sliderNames();
+    return {
+      surfaces: this.rows.map((r) => ({ expression: r.view.input.value.trim(), color: r.view.color, visible: r.view.visible })),
+      parameters: Object.fromEntries(names.map((n) => [n, this.parameters[n] ?? 1])),
+      sliders: Object.fromEntries(Object.entries(this.sliders.ranges()).filter(([n]) => names.includes(n))),
+      box: this.box,
+      constraints: this.constraints,
     };
-    const noteFrame = ({ header: h, removed, triangleIds }) =>
-      note(`${h.kind} s${h.sequence} v${h.functionVersion} -${removed.length} +${triangleIds.length}${h.converged ? ' converged' : ''}`);
-    session.on('state', (state) => {
-      note(`state v${state.version} ${JSON.stringify(state.parameters)}`);
-      this.#refreshStatus();
-    });
-    session.on('keyframe', (frame) => {
-      noteFrame(frame);
-      this.#meshChanged();
-    });
-    session.on('delta', (frame) => {
-      noteFrame(frame);
-      this.#meshChanged();
-    });
-    session.on('resync', ({ reason }) => note(`resync (${reason})`));
-    session.on('firstMesh', () => this.#refreshStatus());
-    session.on('progress', (m) => {
-      if (m.version === session.state?.version) this.errorMax = m.error_max;
-      this.#refreshStatus();
-    });
-    session.on('converged', (m) => {
-      note(`converged v${m.version} s${m.sequence}`);
-      if (m.version === session.state?.version) this.errorMax = m.error_max;
-      this.#refreshStatus();
-    });
-    session.on('error', (error) => {
-      this.lastError = { code: error.code, message: error.message, column: error.column ?? null };
-      this.panel.showError(this.wanted.expression, error.message, error.column);
-      this.#refreshStatus();
-    });
-    session.on('closed', (m) => {
-      if (this.session === session) this.session = null;
-      this.#setStatus(m.reason === 'shutdown' ? 'disconnected' : 'closed');
-    });
   }
 
-  #change(fields) {
-    if (!this.session) {
-      // No session yet (its creation failed, e.g. on a bad equation): try again with everything.
-      if (this.client && !this.client.closed && fields.expression !== undefined) this.#createSession();
-      return;
-    }
-    this.pending = mergeFields(this.pending, fields);
-    this.#setStatus('meshing');
-    this.#pump();
+  /** Parameter names of every surface, in order of first use. */
+  sliderNames() {
+    const names = [];
+    for (const row of this.rows) for (const name of row.surface.parameterNames) if (!names.includes(name)) names.push(name);
+    return names;
   }
 
-  async #pump() {
-    if (this.inFlight || !this.session || !this.pending) return;
-    const fields = this.pending;
-    this.pending = null;
-    this.inFlight = true;
-    try {
-      const state = await this.session.update(fields);
-      if (fields.expression !== undefined) {
-        this.panel.clearError();
-        this.lastError = null;
-      }
-      this.#applyState(state);
-    } catch (error) {
-      const missing = missingParameters(error).filter((name) => !(name in (fields.parameters ?? {})));
-      if (fields.expression !== undefined && missing.length > 0) {
-        this.#change({ ...fields, parameters: { ...fields.parameters, ...valuesFor(missing, this.wanted.parameters) } });
-      } else {
-        this.#requestFailed(error, fields);
-      }
-    } finally {
-      this.inFlight = false;
-    }
-    this.#pump();
-    this.#refreshStatus();
+  /** Visible surfaces as exported: [{name, color, positions, normals, indices}]. */
+  exportSurfaces() {
+    return this.rows
+      .filter((r) => r.view.visible && r.surface.session && r.surface.triangles > 0)
+      .map((r) => ({ name: r.surface.session.state?.expression ?? r.surface.expression, color: r.view.color, ...r.surface.session.mesh.toIndexed() }));
   }
 
-  #applyState(state) {
-    this.wanted.expression = state.expression ?? this.wanted.expression;
-    this.wanted.box = state.box;
-    this.wanted.constraints = { ...state.constraints };
-    if (!this.pending?.parameters) Object.assign(this.wanted.parameters, state.parameters);
-    this.panel.setParameters(state.parameters);
-    this.panel.setConstraints(state.constraints ?? {});
-    this.panel.setBox(state.box);
-    if (this.panel.equation.value.trim() === '') this.panel.setEquation(this.wanted.expression);
-    const boxKey = state.box.join(',');
-    this.viewer.setBox(state.box, { frame: this.framedBox === null });
-    this.framedBox = boxKey;
-    this.#refreshStatus();
-  }
-
-  #requestFailed(error, fields) {
-    this.lastError = { code: error.code ?? 'internal', message: error.message, column: error.column ?? null };
-    const text = fields.expression ?? this.wanted.expression;
-    this.panel.showError(text, error.message, error.column);
-    this.#refreshStatus();
-  }
-
-  #meshChanged() {
-    this.viewer.requestRender();
-    this.#refreshStatus();
-  }
-
-  #disconnected(reason) {
-    this.session = null;
-    this.client = null;
-    this.inFlight = false;
-    this.#setStatus('disconnected', reason);
-    const delay = RECONNECT_MS[Math.min(this.reconnects++, RECONNECT_MS.length - 1)];
-    setTimeout(() => this.start(), delay);
-  }
-
-  // ---- status ----------------------------------------------------------------------------------
-
-  #refreshStatus() {
-    const s = this.session;
-    if (!s) {
-      this.#setStatus(this.lastError ? 'error' : this.status);
-      return;
-    }
-    let status = 'refining';
-    const busy = this.pending || this.inFlight;
-    if (this.paused) status = 'paused';
-    else if (!busy && s.converged) status = 'converged'; // a version may converge with no frame
-    else if (busy || !s.mesh.synchronized || s.mesh.functionVersion < (s.state?.version ?? 0)) status = 'meshing';
-    this.#setStatus(status);
-  }
-
-  #setStatus(status, detail = '') {
-    this.status = status;
-    this.statusDetail = detail;
-    this.onStatus?.(this);
+  /** The status line's state: the most pressing of the rows'. */
+  get status() {
+    if (this.connection !== 'open') return this.connection;
+    const states = this.rows.map((r) => r.surface.status);
+    const live = states.filter((s) => STATUS_ORDER.includes(s));
+    if (live.length > 0) return STATUS_ORDER.find((s) => live.includes(s));
+    if (states.includes('error')) return 'error';
+    return 'empty';
   }
 
   /** What the status line and tests read. */
   snapshot() {
-    const s = this.session;
+    const active = this.activeRow ?? this.rows[0];
+    const a = active?.surface.snapshot();
+    const surfaces = this.rows.map((r) => ({
+      ...r.surface.snapshot(),
+      color: r.view.color,
+      visible: r.view.visible,
+      notes: [...r.view.notes.children].map((li) => li.textContent),
+      message: r.view.errorBox.hidden ? null : r.view.errorMessage.textContent,
+    }));
+    const errors = this.rows.map((r) => r.surface.errorMax).filter((e) => e !== null);
     return {
       status: this.status,
-      detail: this.statusDetail,
-      session: s?.id ?? null,
-      version: s?.state?.version ?? null,
-      sequence: s?.mesh.sequence ?? null,
-      triangles: s?.mesh.triangleCount ?? 0,
-      errorMax: this.errorMax,
+      detail: this.connectionDetail,
+      triangles: this.rows.reduce((sum, r) => sum + r.surface.triangles, 0),
+      errorMax: errors.length > 0 ? Math.max(...errors) : null,
       bytesReceived: this.client?.bytesReceived ?? 0,
-      firstMeshMs: s?.stats.firstMeshMs ?? null,
-      serverFirstMeshMs: s?.lastConverged?.first_mesh_ms ?? null,
-      expression: this.wanted.expression,
-      parameters: { ...(s?.state?.parameters ?? {}) },
-      box: s?.state?.box ?? this.wanted.box,
-      constraints: s?.state?.constraints ?? null,
-      error: this.lastError,
+      firstMeshMs: a?.firstMeshMs ?? null,
+      session: a?.session ?? null,
+      version: a?.version ?? null,
+      expression: a?.expression ?? null,
+      parameters: Object.fromEntries(this.sliderNames().map((n) => [n, this.parameters[n]])),
+      box: this.box,
+      constraints: a?.constraints ?? this.constraints,
+      error: active?.surface.error ?? null,
+      surfaces,
     };
   }
-}
 
-/** Later fields win; parameters and constraints merge name by name. */
-function mergeFields(earlier, later) {
-  if (!earlier) return { ...later };
-  const merged = { ...earlier, ...later };
-  if (earlier.parameters || later.parameters) merged.parameters = { ...earlier.parameters, ...later.parameters };
-  if (earlier.constraints || later.constraints) merged.constraints = { ...earlier.constraints, ...later.constraints };
-  return merged;
+  // ---- internals -------------------------------------------------------------------------------
+
+  #surfaceChanged(row, what) {
+    const surface = row.surface;
+    if (what === 'session') row.mesh.showSlots(surface.session?.mesh.slots ?? null);
+    if (what === 'state' && surface.session?.state) this.#adoptState(surface.session.state);
+    if (what === 'mesh') this.viewer.requestRender();
+    if (what === 'state' || what === 'session') this.#updateSliders();
+    this.#refresh();
+  }
+
+  /** The server's values: parameters it added (a name the client-side scan missed), constraints in force. */
+  #adoptState(state) {
+    for (const [name, value] of Object.entries(state.parameters)) this.parameters[name] ??= value;
+    if (state.constraints) {
+      const c = state.constraints;
+      this.constraints = { triangles: c.triangles, max_error: c.max_error, error_measure: c.error_measure, ...this.constraints };
+      this.panel.setConstraints({ ...c, ...this.constraints });
+    }
+  }
+
+  #updateSliders() {
+    this.sliders.setNames(this.sliderNames(), this.parameters);
+  }
+
+  /** Redraws the rows and the status line at the next animation frame (once, however many calls). */
+  #refresh() {
+    if (this.refreshQueued) return;
+    this.refreshQueued = true;
+    requestAnimationFrame(() => {
+      this.refreshQueued = false;
+      for (const row of this.rows) this.#showRow(row);
+      this.onStatus?.(this);
+    });
+  }
+
+  #showRow(row) {
+    const s = row.surface;
+    const status = s.status;
+    row.view.setProgress({ status, triangles: s.triangles, budget: s.session?.state?.constraints?.triangles ?? 0 });
+    const error = row.localError ?? s.error;
+    if (error !== row.shownError) {
+      row.shownError = error;
+      if (error) row.view.showError(error.text ?? '', error.message, error.column ?? null);
+      else row.view.clearError();
+    }
+    row.view.setNotes(s.empty && !error ? [...row.notes, NO_SURFACE_MESSAGE] : row.notes);
+  }
+
+  #stateChanged() {
+    this.onStateChange?.();
+    this.#refresh();
+  }
+
+  #disconnected(reason) {
+    this.client = null;
+    this.connection = 'disconnected';
+    this.connectionDetail = reason;
+    for (const row of this.rows) row.surface.detach();
+    this.#refresh();
+    const delay = RECONNECT_MS[Math.min(this.reconnects++, RECONNECT_MS.length - 1)];
+    setTimeout(() => this.start(), delay);
+  }
 }

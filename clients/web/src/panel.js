@@ -1,41 +1,43 @@
-// The left panel, GeoGebra's "algebra view": the equation input (errors under it with the column
-// marked), one slider per parameter, quality and view box settings, display toggles. It holds no
-// session logic: it shows what it is told and reports what the user does through `handlers`.
+// The panel's settings: examples, detail (triangle budget, error bound and measure), the view box
+// (with a message when it is not a box), display options, and the share/export buttons. The
+// object list and the sliders have their own modules. It holds no session logic: it shows what it
+// is told and reports what the user does through `handlers`.
 
 import { GALLERY } from './gallery.js';
+import { validBox } from './url_state.js';
 
 const $ = (selector) => document.querySelector(selector);
+const AXES = ['x', 'y', 'z'];
+const SHARE_NOTE_MS = 8000;
 
 /**
- * @param {object} handlers
- *   onEquation(text), onParameter(name, value), onBudget(triangles), onMaxError(value),
- *   onErrorMeasure(name),
- *   onBox(box), onGallery(example), onWireframe(on), onShowBox(on), onResetView(), onPause()
+ * @param {object} handlers onBudget(triangles), onMaxError(value), onErrorMeasure(name), onBox(box),
+ *   onGallery(example), onColorMode(mode), onShown({axes, grid, box}), onWireframe(on),
+ *   onResetView(), onPause(), onAddSurface(), onCopyLink(), onExport(format), onHelp(),
+ *   onPanelShown(on)
  */
 export class Panel {
   constructor(handlers) {
     this.handlers = handlers;
-    this.equation = $('#equation');
-    this.error = $('#equation-error');
-    this.sliders = $('#parameters .sliders');
-    this.noParameters = $('#parameters .empty');
     this.budget = $('#budget');
-    this.budgetValue = $('#budget-value');
     this.maxError = $('#max-error');
     this.errorMeasure = $('#error-measure');
     this.boxInputs = [...document.querySelectorAll('[data-box]')];
+    this.boxError = $('#box-error');
+    this.colorMode = $('#color-mode');
+    this.checks = { axes: $('#show-axes'), grid: $('#show-grid'), box: $('#show-box') };
+    this.wireframe = $('#wireframe');
     this.pauseButton = $('#pause');
-    this.sliderRows = new Map();
+    this.addButton = $('#add-surface');
+    this.exportButton = $('#export');
+    this.exportMenu = $('#export-menu');
+    this.shareNote = $('#share-note');
+    this.shareLink = $('#share-link');
     this.#wire();
   }
 
   #wire() {
     const h = this.handlers;
-    this.equation.addEventListener('keydown', (event) => {
-      if (event.key === 'Enter') h.onEquation(this.equation.value.trim());
-    });
-    this.equation.addEventListener('input', () => this.equation.classList.remove('invalid'));
-
     const gallery = $('#gallery');
     GALLERY.forEach((example, i) => gallery.add(new Option(example.name, String(i))));
     gallery.addEventListener('change', () => {
@@ -43,117 +45,51 @@ export class Panel {
       gallery.value = '';
     });
 
-    this.budget.addEventListener('input', () => this.#showBudget(this.#budgetTriangles()));
-    this.budget.addEventListener('change', () => h.onBudget(this.#budgetTriangles()));
+    this.budget.addEventListener('change', () => {
+      const n = Number(this.budget.value);
+      const valid = Number.isInteger(n) && n >= 1;
+      this.budget.classList.toggle('invalid', !valid);
+      if (valid) h.onBudget(n);
+    });
     this.maxError.addEventListener('change', () => {
       const value = this.maxError.value === '' ? 0 : Number(this.maxError.value);
-      if (Number.isFinite(value) && value >= 0) h.onMaxError(value);
+      const valid = Number.isFinite(value) && value >= 0;
+      this.maxError.classList.toggle('invalid', !valid);
+      if (valid) h.onMaxError(value);
     });
     this.errorMeasure.addEventListener('change', () => h.onErrorMeasure(this.errorMeasure.value));
     for (const input of this.boxInputs) input.addEventListener('change', () => this.#boxChanged());
 
-    $('#wireframe').addEventListener('change', (e) => h.onWireframe(e.target.checked));
-    $('#show-box').addEventListener('change', (e) => h.onShowBox(e.target.checked));
+    this.colorMode.addEventListener('change', () => h.onColorMode(this.colorMode.value));
+    for (const [key, box] of Object.entries(this.checks)) box.addEventListener('change', () => h.onShown({ [key]: box.checked }));
+    this.wireframe.addEventListener('change', () => h.onWireframe(this.wireframe.checked));
     $('#reset-view').addEventListener('click', () => h.onResetView());
     this.pauseButton.addEventListener('click', () => h.onPause());
-  }
+    this.addButton.addEventListener('click', () => h.onAddSurface());
+    $('#copy-link').addEventListener('click', () => h.onCopyLink());
+    $('#show-help').addEventListener('click', () => h.onHelp());
+    $('#hide-panel').addEventListener('click', () => h.onPanelShown(false));
+    $('#show-panel').addEventListener('click', () => h.onPanelShown(true));
 
-  setEquation(text) {
-    this.equation.value = text;
-    this.equation.classList.remove('invalid');
-  }
-
-  /**
-   * Shows an error under the input: the equation with the character at the 1-based `column`
-   * (code points, as the server counts them) marked, then the message. No column: message only.
-   */
-  showError(text, message, column) {
-    const marked = this.error.querySelector('.marked');
-    marked.replaceChildren();
-    if (Number.isInteger(column) && column >= 1) {
-      const chars = Array.from(text);
-      const at = Math.min(column - 1, chars.length);
-      const mark = document.createElement('mark');
-      mark.textContent = chars[at] ?? ' ';
-      marked.append(chars.slice(0, at).join(''), mark, chars.slice(at + 1).join(''));
-      marked.hidden = false;
-    } else {
-      marked.hidden = true;
-    }
-    this.error.querySelector('.message').textContent = message;
-    this.error.hidden = false;
-    this.equation.classList.add('invalid');
-  }
-
-  clearError() {
-    this.error.hidden = true;
-    this.equation.classList.remove('invalid');
-  }
-
-  /** One slider per parameter, in the given order; existing sliders keep their ranges. */
-  setParameters(parameters) {
-    const names = Object.keys(parameters);
-    for (const [name, row] of this.sliderRows) {
-      if (!names.includes(name)) {
-        row.element.remove();
-        this.sliderRows.delete(name);
+    this.exportButton.addEventListener('click', () => this.#toggleExportMenu(this.exportMenu.hidden));
+    this.exportMenu.addEventListener('click', (event) => {
+      const format = event.target.closest('[data-format]')?.dataset.format;
+      if (!format) return;
+      this.#toggleExportMenu(false);
+      h.onExport(format);
+    });
+    this.exportMenu.addEventListener('keydown', (event) => {
+      if (event.key === 'Escape') {
+        this.#toggleExportMenu(false);
+        this.exportButton.focus();
       }
-    }
-    for (const name of names) {
-      const row = this.sliderRows.get(name) ?? this.#addSlider(name, parameters[name]);
-      if (!row.element.contains(document.activeElement)) row.set(parameters[name]); // not while dragged
-      this.sliders.append(row.element); // keeps the order of `names`
-    }
-    this.noParameters.hidden = names.length > 0;
+    });
   }
 
-  #addSlider(name, value) {
-    const element = document.createElement('div');
-    element.className = 'slider';
-    element.dataset.parameter = name;
-    const label = document.createElement('span');
-    label.className = 'name';
-    label.textContent = name;
-    const range = document.createElement('input');
-    range.type = 'range';
-    range.setAttribute('aria-label', `parameter ${name}`);
-    const number = document.createElement('input');
-    number.type = 'number';
-    number.step = 'any';
-    number.setAttribute('aria-label', `value of ${name}`);
-    element.append(label, range, number);
-
-    const span = Math.max(5, Math.ceil(2 * Math.abs(value)));
-    const setRange = (lo, hi) => {
-      range.min = String(lo);
-      range.max = String(hi);
-      range.step = String((hi - lo) / 1000);
-    };
-    setRange(-span, span);
-    const row = {
-      element,
-      set: (v) => {
-        if (v < Number(range.min) || v > Number(range.max)) {
-          const wider = Math.max(5, Math.ceil(2 * Math.abs(v)));
-          setRange(-wider, wider);
-        }
-        range.value = String(v);
-        number.value = String(round(v));
-      },
-    };
-    range.addEventListener('input', () => {
-      const v = Number(range.value);
-      number.value = String(round(v));
-      this.handlers.onParameter(name, v);
-    });
-    number.addEventListener('change', () => {
-      const v = Number(number.value);
-      if (number.value === '' || !Number.isFinite(v)) return;
-      row.set(v);
-      this.handlers.onParameter(name, v);
-    });
-    this.sliderRows.set(name, row);
-    return row;
+  #toggleExportMenu(open) {
+    this.exportMenu.hidden = !open;
+    this.exportButton.setAttribute('aria-expanded', String(open));
+    if (open) this.exportMenu.querySelector('button').focus();
   }
 
   setConstraints({ triangles, max_error: maxError, error_measure: measure }) {
@@ -161,39 +97,62 @@ export class Panel {
       this.errorMeasure.add(new Option(measure, measure)); // a measure this page does not list
     }
     if (measure) this.errorMeasure.value = measure;
-    if (Number.isFinite(triangles)) {
-      this.budget.value = String(Math.log10(triangles));
-      this.#showBudget(triangles);
-    }
-    if (Number.isFinite(maxError)) this.maxError.value = maxError > 0 ? String(maxError) : '';
+    if (Number.isFinite(triangles) && document.activeElement !== this.budget) this.budget.value = String(triangles);
+    if (Number.isFinite(maxError) && document.activeElement !== this.maxError) this.maxError.value = maxError > 0 ? String(maxError) : '';
   }
 
   setBox(box) {
-    this.boxInputs.forEach((input, i) => (input.value = String(box[i])));
+    this.boxInputs.forEach((input, i) => {
+      input.value = String(box[i]);
+      input.classList.remove('invalid');
+    });
+    this.boxError.hidden = true;
+  }
+
+  setDisplay({ colorMode, show, wireframe }) {
+    if (colorMode) this.colorMode.value = colorMode;
+    if (show) for (const [key, box] of Object.entries(this.checks)) box.checked = show.includes(key);
+    if (wireframe !== undefined) this.wireframe.checked = wireframe;
   }
 
   setPaused(paused) {
     this.pauseButton.textContent = paused ? 'Resume' : 'Pause';
   }
 
-  #budgetTriangles() {
-    const raw = 10 ** Number(this.budget.value);
-    const magnitude = 10 ** Math.max(0, Math.floor(Math.log10(raw)) - 1);
-    return Math.round(raw / magnitude) * magnitude; // two significant digits
+  setCanAdd(can, why) {
+    this.addButton.disabled = !can;
+    this.addButton.title = can ? '' : why;
   }
 
-  #showBudget(triangles) {
-    this.budgetValue.textContent = triangles.toLocaleString('en-US');
+  /** A short note under the share buttons (link copied, file exported, or why not). */
+  showShareNote(text, link = null) {
+    this.shareNote.textContent = text;
+    this.shareNote.hidden = false;
+    clearTimeout(this.shareNoteTimer);
+    if (link === null) this.shareNoteTimer = setTimeout(() => (this.shareNote.hidden = true), SHARE_NOTE_MS);
+    this.shareLink.hidden = link === null;
+    if (link !== null) {
+      this.shareLink.value = link;
+      this.shareLink.select();
+    }
   }
 
   #boxChanged() {
-    const box = this.boxInputs.map((input) => Number(input.value));
-    const valid = box.every(Number.isFinite) && box[0] < box[1] && box[2] < box[3] && box[4] < box[5];
-    this.boxInputs.forEach((input) => input.classList.toggle('invalid', !valid));
-    if (valid) this.handlers.onBox(box);
+    const box = this.boxInputs.map((input) => (input.value.trim() === '' ? NaN : Number(input.value)));
+    const problems = [];
+    for (let axis = 0; axis < 3; ++axis) {
+      const [lo, hi] = [box[2 * axis], box[2 * axis + 1]];
+      const name = AXES[axis];
+      if (!Number.isFinite(lo) || !Number.isFinite(hi)) problems.push(`${name} min and ${name} max must be numbers.`);
+      else if (lo >= hi) problems.push(`${name} min (${lo}) must be less than ${name} max (${hi}).`);
+    }
+    this.boxInputs.forEach((input, i) => {
+      const axis = Math.floor(i / 2);
+      const [lo, hi] = [box[2 * axis], box[2 * axis + 1]];
+      input.classList.toggle('invalid', !(Number.isFinite(lo) && Number.isFinite(hi) && lo < hi));
+    });
+    this.boxError.textContent = problems.length ? `Not a box: ${problems.join(' ')} The surfaces keep the previous box.` : '';
+    this.boxError.hidden = problems.length === 0;
+    if (validBox(box)) this.handlers.onBox(box);
   }
-}
-
-function round(v) {
-  return Math.round(v * 1000) / 1000;
 }

@@ -10,7 +10,7 @@ const FUNCTIONS = new Set(
 );
 const CONSTANTS = new Set(['pi', 'π', 'e', '∞', 'inf']);
 // A number (skipped, so that the exponent of `1e-3` is no name) or a name.
-const TOKEN = /(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|([\p{L}_][\p{L}\p{N}_]*)/gu;
+export const TOKEN = /(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|([\p{L}_][\p{L}\p{N}_]*)/gu;
 
 /** The parameter names of `expression`, in order of first use. */
 export function parameterNames(expression) {
@@ -38,4 +38,25 @@ export function missingParameters(error) {
   if (error?.code !== 'bad_field') return [];
   const match = /no value for parameters? (.*)$/.exec(error.message ?? '');
   return match ? [...match[1].matchAll(/'([^']+)'/g)].map((m) => m[1]) : [];
+}
+
+const HTML_ATTRIBUTE = /^(id|class|style|title|lang|dir|hidden|slot|part|tabindex|is|role|aria-.*|data-.*|on.*)$/;
+
+/**
+ * Parameter values of an <isomesh-surface>: numeric attributes other than the element's own and
+ * HTML's (`a="4"`), then the `parameters` list ("R: 2, r: 0.7" or "R=2; r=0.7"), which keeps the
+ * case of names that HTML lowercases in attribute names.
+ * @param {Iterable<{name, value}>} attributes
+ */
+export function parameterAttributes(attributes, listed, own = new Set()) {
+  const values = {};
+  for (const { name, value } of attributes) {
+    if (own.has(name) || HTML_ATTRIBUTE.test(name) || value.trim() === '') continue;
+    if (Number.isFinite(Number(value))) values[name] = Number(value);
+  }
+  for (const part of (listed ?? '').split(/[,;]/)) {
+    const match = /^\s*([^:=\s]+)\s*[:=]\s*(\S+)\s*$/.exec(part);
+    if (match && Number.isFinite(Number(match[2]))) values[match[1]] = Number(match[2]);
+  }
+  return values;
 }

@@ -4,7 +4,8 @@
 // The slot table's position and normal arrays are the attributes' arrays themselves (no copy).
 // After each batch of frames, sync() uploads only the slot ranges the frames wrote
 // (BufferAttribute update ranges: one bufferSubData per range) and sets the draw range to the
-// live triangles. three.js clears the ranges once it has uploaded them. Only when the table grows (doubling: O(log n) times per session) are the GPU
+// live triangles. three.js clears the ranges once it has uploaded them.
+// Only when the table grows (doubling: O(log n) times per session) are the GPU
 // buffers replaced.
 
 import { BufferAttribute, BufferGeometry, DynamicDrawUsage } from 'three';
@@ -25,6 +26,12 @@ export class SlotGeometry {
     this.slots = slots;
     this.generation = -1;
     this.sync();
+  }
+
+  /** Shows nothing (the surface has no session). */
+  detach() {
+    this.slots = null;
+    this.geometry.setDrawRange(0, 0);
   }
 
   /** Uploads what changed since the last call; returns true when anything did. */

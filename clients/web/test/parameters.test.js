@@ -1,7 +1,7 @@
 import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
-import { missingParameters, parameterNames, valuesFor } from '../src/parameters.js';
+import { missingParameters, parameterAttributes, parameterNames, valuesFor } from '../src/parameters.js';
 
 test('parameterNames: names other than coordinates, constants and called functions', () => {
   assert.deepEqual(parameterNames('x^2+y^2+z^2=a'), ['a']);
@@ -23,4 +23,11 @@ test('missingParameters reads the names a bad_field error lists', () => {
   assert.deepEqual(missingParameters({ code: 'bad_field', message: "parameters: no value for parameter 'k'" }), ['k']);
   assert.deepEqual(missingParameters({ code: 'bad_expression', message: "no value for parameter 'k'" }), []);
   assert.deepEqual(missingParameters({ code: 'bad_field', message: 'box: must be an array' }), []);
+});
+
+test('parameterAttributes: numeric attributes and the parameters list, not HTML or own attributes', () => {
+  const attributes = Object.entries({ equation: 'x=a', a: '4', budget: '100', id: '7', 'data-x': '1', style: '', b: 'wide', r: '2' }).map(
+    ([name, value]) => ({ name, value }),
+  );
+  assert.deepEqual(parameterAttributes(attributes, 'R: 2.5, r=0.7; bad', new Set(['equation', 'budget'])), { a: 4, r: 0.7, R: 2.5 });
 });

@@ -1,4 +1,5 @@
-// Function versions (set_field): the refined mesh follows a changing function.
+// Function versions (set_field, reset): the refined mesh follows a changing function. (Whether
+// the topology changed is the pipeline's to decide: tests/progressive.)
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -19,8 +20,12 @@ std::shared_ptr<const Field> sphere_a(double a) {
 RefineSettings sphere_settings(std::size_t budget) {
     RefineSettings s;
     s.constraint = Constraint::triangle_budget(budget);
-    s.phase1 = [](const Field& f) { return test::cube_sphere_mesh(f, 3); };
     return s;
+}
+
+Refiner sphere_refiner(double a, const RefineSettings& settings) {
+    auto field = sphere_a(a);
+    return Refiner(field, test::cube_sphere_mesh(*field, 3), settings);
 }
 
 double max_distance_to_sphere(const Mesh& mesh, double radius) {
@@ -32,7 +37,7 @@ double max_distance_to_sphere(const Mesh& mesh, double radius) {
 
 TEST(RefinerVersions, fifty_parameter_changes_end_like_a_fresh_mesh) {
     const RefineSettings settings = sphere_settings(3000);
-    Refiner refiner(sphere_a(1.0), settings);
+    Refiner refiner = sphere_refiner(1.0, settings);
     refiner.run_to_convergence();
     std::vector<MeshDelta> deltas;
     const MeshDelta start = refiner.snapshot();
@@ -40,14 +45,14 @@ TEST(RefinerVersions, fifty_parameter_changes_end_like_a_fresh_mesh) {
         const double a = 1.0 + 19.0 * i / 50.0;
         refiner.set_field(sphere_a(a));
         // A slider moves faster than the mesh converges: only part of the work between changes.
-        deltas.push_back(refiner.step({1500, 0}).delta);
+        deltas.push_back(refiner.step({1500}).delta);
         EXPECT_EQ(test::check_conforming(refiner.mesh().mesh), "") << "a = " << a;
     }
     deltas.push_back(refiner.run_to_convergence().delta);
     EXPECT_EQ(refiner.version(), 51u);
     EXPECT_EQ(refiner.counters().restarts, 0u);
 
-    Refiner fresh(sphere_a(20.0), settings);
+    Refiner fresh = sphere_refiner(20.0, settings);
     fresh.run_to_convergence();
 
     const RefinedMesh changed = refiner.mesh();
@@ -81,7 +86,7 @@ TEST(RefinerVersions, fifty_parameter_changes_end_like_a_fresh_mesh) {
 
 // Moving vertices along a changed function is all a new version needs when the change is small.
 TEST(RefinerVersions, a_small_change_moves_vertices_without_restarting) {
-    Refiner refiner(sphere_a(4.0), sphere_settings(2000));
+    Refiner refiner = sphere_refiner(4.0, sphere_settings(2000));
     refiner.run_to_convergence();
     const RefinedMesh before = refiner.mesh();
     refiner.set_field(sphere_a(4.2));
@@ -95,7 +100,7 @@ TEST(RefinerVersions, a_small_change_moves_vertices_without_restarting) {
 }
 
 TEST(RefinerVersions, field_change_pending_until_the_last_vertex_and_error_is_refreshed) {
-    Refiner refiner(sphere_a(4.0), sphere_settings(2000));
+    Refiner refiner = sphere_refiner(4.0, sphere_settings(2000));
     refiner.run_to_convergence();
     EXPECT_FALSE(refiner.field_change_pending());
     refiner.set_field(sphere_a(4.2));
@@ -103,7 +108,7 @@ TEST(RefinerVersions, field_change_pending_until_the_last_vertex_and_error_is_re
     // Small steps: the flag drops in the step that refreshes the last item, not a step later.
     std::size_t refreshed = 0;
     while (refiner.field_change_pending()) {
-        const StepResult r = refiner.step(StepBudget{64, 0});
+        const StepResult r = refiner.step(StepBudget{64});
         ASSERT_GT(r.refreshed, 0u) << "a step while pending refreshes something";
         refreshed += r.refreshed;
     }
@@ -141,25 +146,24 @@ std::shared_ptr<const Field> two_spheres(double d) {
          }});
 }
 
-TEST(RefinerVersions, a_topology_change_restarts_from_phase_one) {
-    // The fixture's phase 1 knows the two shapes: apart (d > 1), or one star-shaped blob.
+TEST(RefinerVersions, reset_replaces_the_mesh_with_ids_continuing) {
+    // Two balls apart (d = 3), then one star-shaped blob (d = 0.5): the owner of the refiner
+    // sees the topology change and resets it with the new function's phase-1 mesh.
     RefineSettings s;
     s.constraint = Constraint::triangle_budget(1500);
-    double current_d = 3.0;
-    s.phase1 = [&current_d](const Field& f) {
-        if (current_d <= 1.0) return test::cube_sphere_mesh(f, 3);
-        auto unit = test::make_sphere_field({0, 0, 0}, 1.0);
-        const Mesh ball = test::cube_sphere_mesh(*unit, 3);
-        (void)f;
-        return joined(translated(ball, {current_d, 0, 0}), translated(ball, {-current_d, 0, 0}));
-    };
-    Refiner refiner(two_spheres(current_d), s);
+    auto unit = test::make_sphere_field({0, 0, 0}, 1.0);
+    const Mesh ball = test::cube_sphere_mesh(*unit, 3);
+    Refiner refiner(two_spheres(3.0),
+                    joined(translated(ball, {3.0, 0, 0}), translated(ball, {-3.0, 0, 0})), s);
     refiner.run_to_convergence();
     EXPECT_EQ(analyze_topology(refiner.mesh().mesh).components, 2u);
+    EXPECT_EQ(refiner.root_topology().components, 2u);
     const MeshDelta start = refiner.snapshot();
 
-    current_d = 0.5;
-    refiner.set_field(two_spheres(current_d));
+    const auto blob = two_spheres(0.5);
+    refiner.set_field(blob);
+    refiner.reset(test::cube_sphere_mesh(*blob, 3));
+    EXPECT_EQ(refiner.root_topology().components, 1u);
     const StepResult r = refiner.run_to_convergence();
     EXPECT_TRUE(r.restarted);
     EXPECT_EQ(refiner.counters().restarts, 1u);
@@ -176,8 +180,8 @@ TEST(RefinerVersions, a_topology_change_restarts_from_phase_one) {
     EXPECT_GT(m.triangle_ids.front(), start.added_triangles.back().id);
 }
 
-// Without phase 1 the refiner can only move vertices; they stay put where no surface is near.
-TEST(RefinerVersions, without_phase_one_vertices_only_move) {
+// The refiner only moves vertices; they stay put where no surface is near, and it says so.
+TEST(RefinerVersions, vertices_out_of_reach_stay_and_are_reported) {
     RefineSettings s;
     s.constraint = Constraint::triangle_budget(500);
     auto field = sphere_a(1.0);
@@ -186,6 +190,7 @@ TEST(RefinerVersions, without_phase_one_vertices_only_move) {
     refiner.set_field(sphere_a(100.0));  // radius 10: far beyond the vertices' reach
     refiner.run_to_convergence();
     EXPECT_GT(refiner.counters().failed_refreshes, 0u);
+    EXPECT_TRUE(refiner.refresh_failed());
     EXPECT_EQ(refiner.counters().restarts, 0u);
     EXPECT_EQ(test::check_conforming(refiner.mesh().mesh), "");
 }
@@ -203,13 +208,14 @@ TEST(RefinerVersions, exchanges_follow_a_moving_bump) {
     const std::string expression = "x^2+y^2+z^2-4-3exp(-8((x-a)^2+y^2+(z-1)^2))=0";
     RefineSettings settings;
     settings.constraint = Constraint::triangle_budget(6000);
-    settings.phase1 = [](const Field& f) {
+    auto phase1 = [](const std::shared_ptr<const Field>& f) {
         PolygonizeSettings p;
         p.min_depth = 3;
         p.threads = 1;
-        return polygonize(f, p).mesh;
+        return polygonize(*f, p).mesh;
     };
-    Refiner refiner(test::compile_field(expression, {{"a", 1.5}}), settings);
+    const auto first = test::compile_field(expression, {{"a", 1.5}});
+    Refiner refiner(first, phase1(first), settings);
     refiner.run_to_convergence();
     for (double a : {1.0, 0.5, 0.0, -0.5, -1.0, -1.5}) {
         refiner.set_field(test::compile_field(expression, {{"a", a}}));
@@ -227,7 +233,7 @@ TEST(RefinerVersions, exchanges_follow_a_moving_bump) {
     EXPECT_GT(refiner.counters().merges, refiner.counters().swaps);
 
     const auto last = test::compile_field(expression, {{"a", -1.5}});
-    Refiner fresh(last, settings);
+    Refiner fresh(last, phase1(last), settings);
     fresh.run_to_convergence();
     EXPECT_NEAR(refiner.stats().max_error, fresh.stats().max_error, 0.15 * fresh.stats().max_error);
     auto e = last->make_evaluator();

@@ -1,7 +1,8 @@
 // Function versions (the thesis, 3.2.3 "Dynamic data"): a new function bumps the version; every
 // vertex moves onto the new surface, then leaves and mergeable splits are re-evaluated, in batches
 // and coarse before fine; elements out of sight (split triangles) are updated only when they come
-// back. A change of topology (or a vertex with no surface in reach) restarts from phase 1.
+// back. A change of topology is for the refiner's owner to see (it compares a fresh phase-1 mesh
+// with root_topology()); it then starts again from that mesh with reset().
 #include <algorithm>
 #include <cassert>
 #include <stdexcept>
@@ -13,15 +14,6 @@ namespace isomesh {
 
 using namespace refiner_detail;
 
-namespace {
-
-bool same_topology(const TopologyReport& a, const TopologyReport& b) {
-    return a.components == b.components && a.euler_characteristic == b.euler_characteristic &&
-           (a.boundary_edges == 0) == (b.boundary_edges == 0);
-}
-
-}  // namespace
-
 // ---------------------------------------------------------------------------------------------
 // Function versions
 
@@ -30,15 +22,7 @@ void Refiner::Impl::set_field(std::shared_ptr<const Field> field) {
     field_ = std::move(field);
     evaluator_ = field_->make_evaluator();
     ++version_;
-    restart_pending_ = false;
-    fresh_phase1_.reset();
-    if (settings_.phase1) {
-        fresh_phase1_ = settings_.phase1(*field_);
-        if (!same_topology(analyze_topology(*fresh_phase1_), root_topology_)) {
-            restart_pending_ = true;
-            return;
-        }
-    }
+    refresh_failed_ = false;
     // The most outdated vertices first (when the function changes faster than the refresh
     // completes, no vertex is left behind), then in id order: coarse before fine.
     refresh_list_.clear();
@@ -119,7 +103,7 @@ void Refiner::Impl::refresh_vertices(std::span<const std::uint32_t> items) {
             V.gradient_norm = p.gradient_norm;
         } else {
             ++counters_.failed_refreshes;
-            if (fresh_phase1_) restart_pending_ = true;
+            refresh_failed_ = true;
         }
         V.on_surface = p.on_surface();
         V.version = version_;
@@ -137,8 +121,10 @@ void Refiner::Impl::refresh_leaves(std::span<const std::uint32_t> items) {
         const std::uint32_t t = items[i];
         const double error = triangles_[t].error;
         total_error_.add(error - old_errors[i]);
-        PriorityQueue& queue = split_queue_->contains(t) ? *split_queue_ : *blocked_queue_;
-        queue.update(t, error);
+        // A split refused for the old function (no vertex for it) may be possible now.
+        if (split_queue_->contains(t)) split_queue_->remove(t);
+        if (blocked_queue_->contains(t)) blocked_queue_->remove(t);
+        (splittable(t) ? *split_queue_ : *blocked_queue_).insert(t, error);
     }
     counters_.refreshed_triangles += items.size();
 }
@@ -152,16 +138,31 @@ void Refiner::Impl::refresh_records(std::span<const std::uint32_t> items) {
     for (std::uint32_t r : items) merge_queue_->update(r, merge_priority(r));
 }
 
-void Refiner::Impl::restart() {
-    assert(fresh_phase1_);
+void Refiner::Impl::reset(const Mesh& first_mesh) {
+    if (const std::string problem = validate_refinable(first_mesh); !problem.empty())
+        throw std::invalid_argument("Refiner::reset: " + problem);
     clear_all_into_delta();
-    Mesh fresh = std::move(*fresh_phase1_);
-    fresh_phase1_.reset();
-    restart_pending_ = false;
     refresh_stage_ = RefreshStage::None;
     refresh_list_.clear();
-    load(fresh);
+    refresh_next_ = 0;
+    refresh_failed_ = false;
+    load(first_mesh);
+    restarted_ = true;
     ++counters_.restarts;
+}
+
+std::size_t Refiner::Impl::inverted_triangles() const {
+    std::size_t inverted = 0;
+    for (std::uint32_t t = 0; t < triangles_.size(); ++t) {
+        const Triangle& T = triangles_[t];
+        if (T.state != TriangleState::Leaf) continue;
+        const glm::dvec3 normal =
+            glm::cross(position(t, 1) - position(t, 0), position(t, 2) - position(t, 0));
+        const glm::dvec3 surface =
+            vertices_[T.v[0]].normal + vertices_[T.v[1]].normal + vertices_[T.v[2]].normal;
+        if (glm::dot(normal, surface) < 0.0) ++inverted;
+    }
+    return inverted;
 }
 
 }  // namespace isomesh

@@ -1,4 +1,4 @@
-#include "polygonize/worker_pool.h"
+#include "polygonize/evaluator_pool.h"
 
 #include <algorithm>
 #include <atomic>
@@ -9,15 +9,15 @@
 
 namespace isomesh {
 
-WorkerPool::WorkerPool(const Field& field, int threads) {
+EvaluatorPool::EvaluatorPool(const Field& field, int threads) {
     assert(threads >= 1);
     for (int i = 0; i < threads; ++i) {
         evaluators_.push_back(std::make_unique<CountingEvaluator>(field.make_evaluator()));
     }
 }
 
-void WorkerPool::for_each(std::size_t count,
-                          const std::function<void(std::size_t, CountingEvaluator&)>& task) {
+void EvaluatorPool::for_each(std::size_t count,
+                             const std::function<void(std::size_t, CountingEvaluator&)>& task) {
     std::atomic<std::size_t> next{0};
     std::exception_ptr error;
     std::mutex error_mutex;
@@ -44,13 +44,13 @@ void WorkerPool::for_each(std::size_t count,
     if (error) std::rethrow_exception(error);
 }
 
-std::size_t WorkerPool::point_evaluations() const {
+std::size_t EvaluatorPool::point_evaluations() const {
     std::size_t total = 0;
     for (const auto& e : evaluators_) total += e->point_evaluations();
     return total;
 }
 
-std::size_t WorkerPool::interval_evaluations() const {
+std::size_t EvaluatorPool::interval_evaluations() const {
     std::size_t total = 0;
     for (const auto& e : evaluators_) total += e->interval_evaluations();
     return total;

@@ -12,10 +12,10 @@
 
 namespace isomesh {
 
-class WorkerPool {
+class EvaluatorPool {
   public:
     /// threads >= 1 evaluators made by `field`.
-    WorkerPool(const Field& field, int threads);
+    EvaluatorPool(const Field& field, int threads);
 
     int size() const { return static_cast<int>(evaluators_.size()); }
 

@@ -1,0 +1,203 @@
+// Topology-preserving half-edge collapses (see edge_collapse.h). Collapses follow Hoppe et al.,
+// "Mesh optimization" (SIGGRAPH 1993); the link condition is Dey, Edelsbrunner, Guha & Nekhayev,
+// "Topology preserving edge contraction" (Publ. Inst. Math. 1999).
+#include "mesh/edge_collapse.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <iterator>
+
+#include <glm/geometric.hpp>
+
+namespace isomesh {
+namespace {
+
+constexpr double kDegenerateArea = 1e-14;
+
+std::uint32_t third(const CollapseMesh::Triangle& tri, std::uint32_t a, std::uint32_t b) {
+    for (std::uint32_t v : tri) {
+        if (v != a && v != b) return v;
+    }
+    return CollapseMesh::kDead;
+}
+
+bool contains(const CollapseMesh::Triangle& tri, std::uint32_t v) {
+    return tri[0] == v || tri[1] == v || tri[2] == v;
+}
+
+}  // namespace
+
+bool is_degenerate_triangle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+    const double longest =
+        std::max({glm::dot(b - a, b - a), glm::dot(c - b, c - b), glm::dot(a - c, a - c)});
+    return glm::length(glm::cross(b - a, c - a)) <= kDegenerateArea * longest;
+}
+
+double triangle_quality(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+    const double squares = glm::dot(b - a, b - a) + glm::dot(c - b, c - b) + glm::dot(a - c, a - c);
+    if (!(squares > 0.0)) return 0.0;
+    return 2.0 * std::sqrt(3.0) * glm::length(glm::cross(b - a, c - a)) / squares;
+}
+
+CollapseMesh::CollapseMesh(Mesh& mesh, std::span<const std::uint8_t> box_faces)
+    : mesh_(mesh), box_faces_(box_faces), incident_(mesh.positions.size()) {
+    assert(box_faces.size() == mesh.positions.size());
+    for (std::uint32_t t = 0; t < mesh_.triangles.size(); ++t) {
+        for (std::uint32_t v : mesh_.triangles[t]) incident_[v].push_back(t);
+    }
+    live_ = mesh_.triangles.size();
+}
+
+std::vector<std::uint32_t> CollapseMesh::triangles_on_edge(std::uint32_t a, std::uint32_t b) const {
+    std::vector<std::uint32_t> result;
+    for (std::uint32_t t : incident_[a]) {
+        if (contains(mesh_.triangles[t], b)) result.push_back(t);
+    }
+    return result;
+}
+
+std::vector<std::uint32_t> CollapseMesh::neighbours(std::uint32_t v) const {
+    std::vector<std::uint32_t> result;
+    for (std::uint32_t t : incident_[v]) {
+        for (std::uint32_t w : mesh_.triangles[t]) {
+            if (w != v) result.push_back(w);
+        }
+    }
+    std::sort(result.begin(), result.end());
+    result.erase(std::unique(result.begin(), result.end()), result.end());
+    return result;
+}
+
+bool CollapseMesh::on_boundary(std::uint32_t v) const {
+    for (std::uint32_t w : neighbours(v)) {
+        if (triangles_on_edge(v, w).size() == 1) return true;
+    }
+    return false;
+}
+
+bool CollapseMesh::can_collapse(std::uint32_t v, std::uint32_t u) const {
+    if ((box_faces_[v] & ~box_faces_[u]) != 0) return false;
+    const std::vector<std::uint32_t> on_edge = triangles_on_edge(u, v);
+    if (on_edge.empty() || on_edge.size() > 2) return false;
+    std::vector<std::uint32_t> opposite;
+    for (std::uint32_t t : on_edge) opposite.push_back(third(mesh_.triangles[t], u, v));
+    std::sort(opposite.begin(), opposite.end());
+    const std::vector<std::uint32_t> nu = neighbours(u), nv = neighbours(v);
+    std::vector<std::uint32_t> common;
+    std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
+    if (common != opposite) return false;
+    if (on_edge.size() == 2 && on_boundary(u) && on_boundary(v)) return false;
+    // An opposite vertex with only the two triangles on u-v (a tetrahedron, or a fan of two on
+    // the boundary) would be left with a degenerate fan.
+    for (std::uint32_t o : opposite) {
+        if (incident_[o].size() <= 2 || (on_edge.size() == 2 && incident_[o].size() <= 3)) {
+            return false;
+        }
+    }
+    for (std::uint32_t t : incident_[v]) {
+        const Triangle& tri = mesh_.triangles[t];
+        if (contains(tri, u)) continue;
+        std::array<glm::dvec3, 3> before, after;
+        for (int i = 0; i < 3; ++i) {
+            before[i] = position(tri[i]);
+            after[i] = tri[i] == v ? position(u) : position(tri[i]);
+        }
+        // A triangle may stay degenerate (several vertices at one point, where the surface runs
+        // through a lattice corner, collapse one after the other) but not become so; one that
+        // was degenerate must come out facing the way the surface's normals do.
+        const bool was_degenerate = is_degenerate_triangle(before[0], before[1], before[2]);
+        if (is_degenerate_triangle(after[0], after[1], after[2])) {
+            if (!was_degenerate) return false;
+            continue;
+        }
+        const glm::dvec3 n0 = glm::cross(before[1] - before[0], before[2] - before[0]);
+        const glm::dvec3 n1 = glm::cross(after[1] - after[0], after[2] - after[0]);
+        const glm::dvec3 surface_before = corner_normals(tri);
+        const glm::dvec3 surface_after = corner_normals(
+            {tri[0] == v ? u : tri[0], tri[1] == v ? u : tri[1], tri[2] == v ? u : tri[2]});
+        if (!(glm::dot(was_degenerate ? surface_before : n0, n1) > 0.0)) return false;
+        // A triangle facing the way the surface's normals at its corners do (towards f > 0)
+        // keeps doing so: coarse collapses must not turn a triangle inside out against the
+        // surface, even where it does not flip against its old self.
+        if (glm::dot(n0, surface_before) > 0.0 && !(glm::dot(n1, surface_after) > 0.0))
+            return false;
+    }
+    return true;
+}
+
+glm::dvec3 CollapseMesh::corner_normals(const Triangle& corners) const {
+    if (mesh_.normals.empty()) return glm::dvec3(0.0);
+    return mesh_.normals[corners[0]] + mesh_.normals[corners[1]] + mesh_.normals[corners[2]];
+}
+
+double CollapseMesh::quality_after_collapse(std::uint32_t v, std::uint32_t u) const {
+    double worst = 1.0;
+    for (std::uint32_t t : incident_[v]) {
+        const Triangle& tri = mesh_.triangles[t];
+        if (contains(tri, u)) continue;
+        std::array<glm::dvec3, 3> q;
+        for (int i = 0; i < 3; ++i) q[i] = tri[i] == v ? position(u) : position(tri[i]);
+        worst = std::min(worst, triangle_quality(q[0], q[1], q[2]));
+    }
+    return worst;
+}
+
+void CollapseMesh::collapse(std::uint32_t v, std::uint32_t u) {
+    for (std::uint32_t t : triangles_on_edge(u, v)) kill(t);
+    for (std::uint32_t t : incident_[v]) {
+        for (std::uint32_t& w : mesh_.triangles[t]) {
+            if (w == v) w = u;
+        }
+        incident_[u].push_back(t);
+    }
+    incident_[v].clear();
+}
+
+void CollapseMesh::kill(std::uint32_t t) {
+    for (std::uint32_t w : mesh_.triangles[t]) {
+        auto& list = incident_[w];
+        list.erase(std::remove(list.begin(), list.end(), t), list.end());
+    }
+    mesh_.triangles[t] = {kDead, kDead, kDead};
+    --live_;
+}
+
+void CollapseMesh::revive(std::uint32_t t, const Triangle& tri) {
+    mesh_.triangles[t] = tri;
+    for (std::uint32_t w : tri) incident_[w].push_back(t);
+    ++live_;
+}
+
+void CollapseMesh::compact() {
+    std::vector<std::uint32_t> new_index(mesh_.positions.size(), kDead);
+    std::uint32_t next = 0;
+    for (std::uint32_t v = 0; v < new_index.size(); ++v) {
+        if (incident_[v].empty()) continue;
+        new_index[v] = next;
+        mesh_.positions[next] = mesh_.positions[v];
+        if (!mesh_.normals.empty()) mesh_.normals[next] = mesh_.normals[v];
+        if (!mesh_.gradient_norms.empty()) mesh_.gradient_norms[next] = mesh_.gradient_norms[v];
+        incident_[next] = std::move(incident_[v]);
+        ++next;
+    }
+    mesh_.positions.resize(next);
+    if (!mesh_.normals.empty()) mesh_.normals.resize(next);
+    if (!mesh_.gradient_norms.empty()) mesh_.gradient_norms.resize(next);
+    incident_.resize(next);
+    std::vector<std::uint32_t> new_triangle(mesh_.triangles.size(), kDead);
+    std::size_t kept = 0;
+    for (std::size_t t = 0; t < mesh_.triangles.size(); ++t) {
+        const Triangle& tri = mesh_.triangles[t];
+        if (tri[0] == kDead) continue;
+        new_triangle[t] = static_cast<std::uint32_t>(kept);
+        mesh_.triangles[kept++] = {new_index[tri[0]], new_index[tri[1]], new_index[tri[2]]};
+    }
+    mesh_.triangles.resize(kept);
+    for (auto& list : incident_)
+        for (std::uint32_t& t : list) t = new_triangle[t];
+    mesh_.neighbours.clear();
+    mesh_.base_edge.clear();
+}
+
+}  // namespace isomesh

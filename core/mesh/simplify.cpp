@@ -1,0 +1,175 @@
+// Quadric-error simplification by topology-preserving half-edge collapses (see simplify.h).
+//
+// Each vertex carries the quadric Q = sum of area-weighted K_p = p p^T over the planes p of its
+// triangles (Garland & Heckbert 1997), plus, for each boundary edge, a heavily weighted plane
+// through the edge perpendicular to its triangle, so that boundaries keep their shape. Moving v
+// onto u costs (Q_u + Q_v)(x_u), the squared distance of u's position to the planes of both
+// neighbourhoods: collapses are made cheapest first (ties by vertex indices, so the result is
+// deterministic), each re-checked when popped, since the link condition and the orientation test
+// (edge_collapse.h) depend on the neighbourhood as it is then.
+#include "mesh/simplify.h"
+
+#include <array>
+#include <queue>
+#include <vector>
+
+#include <glm/geometric.hpp>
+
+#include "mesh/edge_collapse.h"
+
+namespace isomesh {
+namespace {
+
+/// A symmetric 4x4 matrix: the quadric of a set of planes.
+struct Quadric {
+    std::array<double, 10> m{};  // a2 ab ac ad b2 bc bd c2 cd d2
+
+    void add_plane(const glm::dvec3& n, double d, double weight) {
+        const double v[4] = {n.x, n.y, n.z, d};
+        int k = 0;
+        for (int i = 0; i < 4; ++i)
+            for (int j = i; j < 4; ++j) m[k++] += weight * v[i] * v[j];
+    }
+    void add(const Quadric& q) {
+        for (int i = 0; i < 10; ++i) m[i] += q.m[i];
+    }
+    double error(const glm::dvec3& p) const {
+        const double v[4] = {p.x, p.y, p.z, 1.0};
+        double sum = 0.0;
+        int k = 0;
+        for (int i = 0; i < 4; ++i)
+            for (int j = i; j < 4; ++j) sum += (i == j ? 1.0 : 2.0) * m[k++] * v[i] * v[j];
+        return sum;
+    }
+};
+
+/// Boundary planes weigh this much more than a triangle's own plane.
+constexpr double kBoundaryWeight = 100.0;
+/// Budget checks every this many queue entries.
+constexpr std::size_t kCheckInterval = 256;
+
+struct Candidate {
+    double cost;
+    std::uint32_t v, u;  // move v onto u
+    std::uint32_t stamp_v, stamp_u;
+    bool operator>(const Candidate& o) const {
+        if (cost != o.cost) return cost > o.cost;
+        if (v != o.v) return v > o.v;
+        return u > o.u;
+    }
+};
+
+class Simplifier {
+  public:
+    Simplifier(Mesh& mesh, std::span<const std::uint8_t> box_faces)
+        : mesh_(mesh, box_faces),
+          quadrics_(mesh.positions.size()),
+          stamps_(mesh.positions.size(), 0),
+          blocked_(mesh.positions.size()) {
+        for (std::uint32_t t = 0; t < mesh_.triangle_slots(); ++t) add_triangle_planes(t);
+        for (std::uint32_t v = 0; v < quadrics_.size(); ++v) push_edges(v);
+    }
+
+    SimplifyReport run(std::size_t target, const WorkBudget& budget) {
+        SimplifyReport report;
+        std::size_t popped = 0;
+        while (mesh_.live_triangles() > target && !queue_.empty()) {
+            if (++popped % kCheckInterval == 0 && budget.exhausted()) {
+                report.cancelled = true;
+                break;
+            }
+            const Candidate c = queue_.top();
+            queue_.pop();
+            if (c.stamp_v != stamps_[c.v] || c.stamp_u != stamps_[c.u]) continue;
+            if (mesh_.incident(c.v).empty()) continue;
+            if (!mesh_.can_collapse(c.v, c.u)) {
+                blocked_[c.v].push_back(c);  // until the neighbourhood changes
+                continue;
+            }
+            collapse(c.v, c.u);
+            ++report.collapses;
+        }
+        report.triangles = mesh_.live_triangles();
+        report.reached = report.triangles <= target;
+        mesh_.compact();
+        return report;
+    }
+
+  private:
+    void add_triangle_planes(std::uint32_t t) {
+        const auto& tri = mesh_.triangle(t);
+        const glm::dvec3 a = mesh_.position(tri[0]), b = mesh_.position(tri[1]),
+                         c = mesh_.position(tri[2]);
+        const glm::dvec3 cross = glm::cross(b - a, c - a);
+        const double twice_area = glm::length(cross);
+        if (!(twice_area > 0.0)) return;
+        const glm::dvec3 n = cross / twice_area;
+        Quadric q;
+        q.add_plane(n, -glm::dot(n, a), 0.5 * twice_area);
+        for (std::uint32_t v : tri) quadrics_[v].add(q);
+        // Boundary edges: a plane through the edge, perpendicular to the triangle.
+        for (int e = 0; e < 3; ++e) {
+            const std::uint32_t p = tri[e], r = tri[(e + 1) % 3];
+            if (mesh_.triangles_on_edge(p, r).size() != 1) continue;
+            const glm::dvec3 edge = mesh_.position(r) - mesh_.position(p);
+            glm::dvec3 side = glm::cross(edge, n);
+            const double length = glm::length(side);
+            if (!(length > 0.0)) continue;
+            side /= length;
+            Quadric b;
+            b.add_plane(side, -glm::dot(side, mesh_.position(p)),
+                        kBoundaryWeight * glm::dot(edge, edge));
+            quadrics_[p].add(b);
+            quadrics_[r].add(b);
+        }
+    }
+
+    void push_edges(std::uint32_t v) {
+        for (std::uint32_t w : mesh_.neighbours(v)) {
+            push(v, w);
+            push(w, v);
+        }
+    }
+
+    void push(std::uint32_t v, std::uint32_t u) {
+        Quadric q = quadrics_[u];
+        q.add(quadrics_[v]);
+        queue_.push({q.error(mesh_.position(u)), v, u, stamps_[v], stamps_[u]});
+    }
+
+    void collapse(std::uint32_t v, std::uint32_t u) {
+        mesh_.collapse(v, u);
+        quadrics_[u].add(quadrics_[v]);
+        ++stamps_[v];
+        // Costs change only on u's edges (its quadric grew): those candidates are made anew. The
+        // link and orientation tests change around u's neighbours too: candidates refused there
+        // are tried again.
+        ++stamps_[u];
+        push_edges(u);
+        for (std::uint32_t w : mesh_.neighbours(u)) {
+            for (const Candidate& c : blocked_[w]) queue_.push(c);
+            blocked_[w].clear();
+        }
+    }
+
+    CollapseMesh mesh_;
+    std::vector<Quadric> quadrics_;
+    std::vector<std::uint32_t> stamps_;
+    std::vector<std::vector<Candidate>> blocked_;  // refused candidates, by the vertex to move
+    std::priority_queue<Candidate, std::vector<Candidate>, std::greater<>> queue_;
+};
+
+}  // namespace
+
+SimplifyReport simplify_to_budget(Mesh& mesh, std::span<const std::uint8_t> box_faces,
+                                  std::size_t target_triangles, const WorkBudget& budget) {
+    if (mesh.triangle_count() <= target_triangles) {
+        SimplifyReport report;
+        report.triangles = mesh.triangle_count();
+        report.reached = true;
+        return report;
+    }
+    return Simplifier(mesh, box_faces).run(target_triangles, budget);
+}
+
+}  // namespace isomesh

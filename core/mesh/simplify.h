@@ -1,0 +1,36 @@
+// Simplification to a triangle budget: the thesis's "mid-phase simplification" (3.3.4), used
+// where phase 1's mesh has more triangles than the session may show. Edges are collapsed
+// cheapest first by the quadric error metric of Garland & Heckbert ("Surface simplification
+// using quadric error metrics", SIGGRAPH 1997), as half-edge collapses that keep the topology
+// (mesh/edge_collapse.h): the mesh keeps its components, genus and boundary loops, every vertex
+// stays where it was (on the surface), the boundary stays on the faces of the meshing box, and no
+// triangle flips.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "mesh/mesh.h"
+#include "work/work_budget.h"
+
+namespace isomesh {
+
+struct SimplifyReport {
+    std::size_t collapses = 0;
+    std::size_t triangles = 0;  ///< after simplification
+    /// triangles <= the target. False when no allowed collapse was left first: the mesh is then
+    /// as small as its topology (and the box) let these collapses make it.
+    bool reached = false;
+    bool cancelled = false;
+};
+
+/// Collapses edges of `mesh` until it has at most `target_triangles` triangles or no collapse is
+/// allowed, then compacts it (neighbours and base edges are cleared). Deterministic. Stops early,
+/// leaving a valid mesh, when the budget is cancelled or exhausted.
+/// Preconditions: as CollapseMesh (manifold, consistently oriented, one normal per vertex,
+/// box_faces.size() == vertex_count()).
+SimplifyReport simplify_to_budget(Mesh& mesh, std::span<const std::uint8_t> box_faces,
+                                  std::size_t target_triangles, const WorkBudget& budget = {});
+
+}  // namespace isomesh

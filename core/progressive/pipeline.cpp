@@ -1,0 +1,263 @@
+// The progressive mesher (see pipeline.h).
+#include "progressive/pipeline.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <utility>
+
+#include "mesh/simplify.h"
+
+namespace isomesh {
+namespace {
+
+/// An intermediate phase-1 mesh is made when the cells classified have doubled since the last.
+constexpr double kRemeshGrowth = 2.0;
+/// Of a step's budget, the share that moves vertices onto a new surface before phase 1 runs.
+constexpr double kRefreshShare = 0.5;
+constexpr std::size_t kAllOperations = ~std::size_t{0};
+
+bool same_topology(const TopologyReport& a, const TopologyReport& b) {
+    return a.components == b.components && a.euler_characteristic == b.euler_characteristic &&
+           (a.boundary_edges == 0) == (b.boundary_edges == 0);
+}
+
+/// Bit 2 * axis + side for each face of `box` the vertex lies on.
+std::vector<std::uint8_t> box_faces(const Mesh& mesh, const Box& box) {
+    std::vector<std::uint8_t> faces(mesh.positions.size(), 0);
+    for (std::size_t v = 0; v < faces.size(); ++v) {
+        for (int axis = 0; axis < 3; ++axis) {
+            if (mesh.positions[v][axis] == box.lo[axis]) faces[v] |= 1u << (2 * axis);
+            if (mesh.positions[v][axis] == box.hi[axis]) faces[v] |= 1u << (2 * axis + 1);
+        }
+    }
+    return faces;
+}
+
+void gather(MeshDelta& into, MeshDelta delta) {
+    if (into.empty()) {
+        into = std::move(delta);
+        return;
+    }
+    DeltaBuilder builder;
+    for (const MeshDelta* d : {&into, &delta}) {
+        for (std::uint32_t id : d->removed_triangles) builder.remove_triangle(id);
+        for (std::uint32_t id : d->removed_vertices) builder.remove_vertex(id);
+        for (const DeltaVertex& v : d->added_vertices) builder.add_vertex(v);
+        for (const DeltaVertex& v : d->moved_vertices) builder.move_vertex(v);
+        for (const DeltaTriangle& t : d->added_triangles) builder.add_triangle(t);
+    }
+    into = builder.take();
+}
+
+}  // namespace
+
+PolygonizeSettings refinement_phase1_settings() {
+    PolygonizeSettings s;
+    s.min_depth = kRefinePhase1MinDepth;
+    s.threads = 1;
+    return s;
+}
+
+Pipeline::Pipeline(std::shared_ptr<const Field> field, PipelineSettings settings)
+    : field_(std::move(field)), settings_(std::move(settings)) {
+    if (!field_) throw std::invalid_argument("Pipeline: null field");
+    if (!(settings_.first_mesh_share > 0.0 && settings_.first_mesh_share <= 1.0))
+        throw std::invalid_argument("Pipeline: first_mesh_share must be in (0, 1]");
+    settings_.phase1.cancel = nullptr;
+    settings_.refine.cancel = nullptr;
+    settings_.refine.box = settings_.phase1.box;
+    phase1_ = std::make_unique<Polygonizer>(field_, settings_.phase1);
+}
+
+Pipeline::~Pipeline() = default;
+
+PipelineStep Pipeline::step(const WorkBudget& budget) {
+    PipelineStep out;
+    const bool first = !refiner_;
+    const bool resolving = phase1_ != nullptr;
+    if (first) {
+        first_mesh(budget);
+    } else if (phase1_) {
+        if (refiner_->field_change_pending())
+            refine(out, {kAllOperations, budget.portion(kRefreshShare)});
+        advance_phase1(budget);
+    } else {
+        refine(out, {kAllOperations, budget});
+    }
+    // Phase 1 just ended: refine with what the step has left, so that a mesh already meeting the
+    // constraint leaves flagged converged.
+    if (refiner_ && resolving && !phase1_ && !budget.exhausted())
+        refine(out, {kAllOperations, budget});
+    if (refiner_ && first) {
+        out.delta = refiner_->snapshot();
+        out.restarted = true;
+    } else if (refiner_) {
+        refine(out, {0, budget});  // what the refiner holds back: a reset's replacement
+    }
+    out.cancelled = budget.cancelled();
+    return out;
+}
+
+void Pipeline::refine(PipelineStep& out, const StepBudget& budget) {
+    StepResult r = refiner_->step(budget);
+    gather(out.delta, std::move(r.delta));
+    out.restarted = out.restarted || r.restarted;
+    out.splits += r.splits;
+    out.merges += r.merges;
+    if (budget.operations > 0) out.converged = r.converged && !phase1_;
+}
+
+PipelineStep Pipeline::run_to_convergence(const WorkBudget& budget) {
+    PipelineStep total;
+    for (;;) {
+        PipelineStep s = step(budget);
+        gather(total.delta, std::move(s.delta));
+        total.restarted = total.restarted || s.restarted;
+        total.splits += s.splits;
+        total.merges += s.merges;
+        if (s.converged || s.cancelled || budget.exhausted()) {
+            total.converged = s.converged;
+            total.cancelled = s.cancelled;
+            return total;
+        }
+    }
+}
+
+void Pipeline::first_mesh(const WorkBudget& budget) {
+    phase1_->advance(budget.portion(settings_.first_mesh_share), settings_.first_mesh_cells);
+    if (phase1_->complete()) {
+        finish_phase1(budget);
+        return;
+    }
+    PolygonizeResult result = phase1_mesh(budget);
+    install(std::move(result.mesh), budget);
+}
+
+void Pipeline::advance_phase1(const WorkBudget& budget) {
+    if (field_changing_ && !refiner_->field_change_pending() && refiner_->refresh_failed()) {
+        // The moved mesh does not follow the new surface: show the new phase 1's as it stands.
+        field_changing_ = false;
+        install(phase1_mesh(budget).mesh, budget);
+    }
+    phase1_->advance(budget);
+    if (phase1_->complete()) {
+        finish_phase1(budget);
+        return;
+    }
+    const OctreeCounts& counts = phase1_->counts();
+    const bool grown = static_cast<double>(counts.classified) >=
+                       kRemeshGrowth * static_cast<double>(classified_at_last_mesh_);
+    if (!field_changing_ && grown &&
+        counts.pending + counts.leaves + counts.unresolved <= settings_.max_intermediate_cells)
+        install(phase1_mesh(budget).mesh, budget);
+}
+
+void Pipeline::finish_phase1(const WorkBudget& budget) {
+    if (field_changing_ && refiner_->field_change_pending()) return;  // decide once moved
+    PolygonizeResult result = phase1_mesh(budget);
+    if (budget.cancelled()) return;
+    status_.resolving = false;
+    status_.region = result.stats.region_cells > 0;
+    status_.certified = result.stats.certified();
+    phase1_.reset();
+    if (field_changing_ && keeps_moved_mesh(result.mesh)) {
+        field_changing_ = false;
+        return;
+    }
+    field_changing_ = false;
+    install(std::move(result.mesh), budget);
+}
+
+PolygonizeResult Pipeline::phase1_mesh(const WorkBudget& budget) {
+    PolygonizeResult result = phase1_->mesh(budget);
+    classified_at_last_mesh_ = phase1_->counts().classified;
+    phase1_stats_ = result.stats;
+    status_.unresolved_cells = result.stats.unresolved_cells;
+    status_.region = result.stats.region_cells > 0;
+    ++status_.phase1_meshes;
+    return result;
+}
+
+bool Pipeline::keeps_moved_mesh(const Mesh& fresh) const {
+    return !refiner_->refresh_failed() && refiner_->inverted_triangles() == 0 &&
+           same_topology(analyze_topology(fresh), refiner_->root_topology());
+}
+
+Mesh Pipeline::fit_to_budget(Mesh mesh, const WorkBudget& budget) {
+    status_.budget_unreachable = false;
+    status_.minimum_triangles = 0;
+    const std::optional<std::size_t> limit = settings_.refine.constraint.triangle_limit();
+    if (!limit || mesh.triangle_count() <= *limit) return mesh;
+    // Not cut short by the step's time: a mesh over the budget may not be shown.
+    const SimplifyReport report = simplify_to_budget(mesh, box_faces(mesh, settings_.phase1.box),
+                                                     *limit, WorkBudget(budget.cancel_flag()));
+    if (!report.reached && !report.cancelled) {
+        status_.budget_unreachable = true;
+        status_.minimum_triangles = report.triangles;
+    }
+    build_adjacency(mesh);
+    return mesh;
+}
+
+void Pipeline::install(Mesh mesh, const WorkBudget& budget) {
+    if (budget.cancelled()) return;
+    installed_ = mesh;
+    Mesh root = fit_to_budget(std::move(mesh), budget);
+    if (budget.cancelled()) return;
+    if (!refiner_) {
+        refiner_ = std::make_unique<Refiner>(field_, root, settings_.refine);
+    } else {
+        refiner_->reset(root);
+    }
+}
+
+void Pipeline::set_field(std::shared_ptr<const Field> field) {
+    if (!field) throw std::invalid_argument("Pipeline::set_field: null field");
+    field_ = std::move(field);
+    phase1_ = std::make_unique<Polygonizer>(field_, settings_.phase1);
+    classified_at_last_mesh_ = 0;
+    status_.resolving = true;
+    status_.certified = false;
+    status_.region = false;
+    if (refiner_) {
+        refiner_->set_field(field_);
+        field_changing_ = true;
+    }
+}
+
+void Pipeline::set_constraint(Constraint constraint) {
+    settings_.refine.constraint = std::move(constraint);
+    if (!refiner_) return;
+    refiner_->set_constraint(settings_.refine.constraint);
+    // A budget below the phase-1 mesh's (simplified) triangles: simplify it again. (A higher one
+    // is reached by refining from the roots as they are.)
+    const std::optional<std::size_t> limit = settings_.refine.constraint.triangle_limit();
+    if (limit && installed_ && refiner_->root_topology().triangles > *limit)
+        install(*installed_, WorkBudget{});
+}
+
+void Pipeline::settle() {
+    if (phase1_) phase1_->settle();
+}
+
+bool Pipeline::field_change_pending() const {
+    return refiner_ && refiner_->field_change_pending();
+}
+
+MeshStats Pipeline::stats() const {
+    return refiner_->stats();
+}
+
+const RefineCounters& Pipeline::counters() const {
+    return refiner_->counters();
+}
+
+RefinedMesh Pipeline::mesh() const {
+    return refiner_->mesh();
+}
+
+MeshDelta Pipeline::snapshot() const {
+    return refiner_->snapshot();
+}
+
+}  // namespace isomesh

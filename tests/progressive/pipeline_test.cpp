@@ -1,0 +1,234 @@
+// The progressive pipeline (progressive/pipeline.h) as the server drives it: slice by slice, a
+// client's copy of the mesh updated by every step's delta.
+#include "progressive/pipeline.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "counting_field.h"
+#include "mesh/topology.h"
+#include "support/mesh_checks.h"
+
+namespace isomesh {
+namespace {
+
+Box box_of(double x0, double x1, double y0, double y1, double z0, double z1) {
+    return {{x0, y0, z0}, {x1, y1, z1}};
+}
+Box cube(double r) {
+    return box_of(-r, r, -r, r, -r, r);
+}
+
+struct Surface {
+    std::string name;
+    std::string expression;
+    Box box;
+};
+
+/// The surfaces of the issue that made the budget a bound (the viewer's examples).
+const Surface kTorus{"torus", "(sqrt(x^2+y^2)-2)^2+z^2=0.49",
+                     box_of(-3.2, 3.2, -3.2, 3.2, -1.2, 1.2)};
+const Surface kTanglecube{"tanglecube", "x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8=0", cube(3)};
+const Surface kGyroid{"gyroid", "sin(x)cos(y)+sin(y)cos(z)+sin(z)cos(x)=0", cube(6)};
+const Surface kHeart{"heart", "(x^2+2.25y^2+z^2-1)^3-x^2z^3-0.1125y^2z^3=0", cube(1.5)};
+const Surface kGenusTwo{"genus_two", "((x^2+y^2)^2-x^2+y^2)^2+z^2=0.01",
+                        box_of(-1.4, 1.4, -0.9, 0.9, -0.3, 0.3)};
+const Surface kBlobbyCube{"blobby_cube", "sqrt(x^2+y^2+z^2)+2cos(2x)+2cos(2y)+2cos(2z)=20",
+                          cube(28)};
+
+PipelineSettings settings_for(const Box& box, std::size_t budget) {
+    PipelineSettings s;
+    s.phase1.box = box;
+    s.refine.constraint = Constraint::triangle_budget(budget);
+    return s;
+}
+
+/// Steps `pipeline` in slices of `slice_us` until converged, applying every delta to a client's
+/// copy; at every step the copy has at most the budget's triangles (or, where the budget cannot be
+/// met, the fewest the simplification reached). Returns the client's mesh.
+DeltaMesh step_to_convergence(Pipeline& pipeline, std::size_t budget, DeltaMesh client = {},
+                              std::int64_t slice_us = 2000) {
+    for (int step = 0; step < 200000; ++step) {
+        const PipelineStep s = pipeline.step(WorkBudget(slice_us, WorkBudget::thread_cpu_clock()));
+        const std::string error = client.apply(s.delta);
+        EXPECT_EQ(error, "") << "step " << step;
+        if (!error.empty()) break;
+        const PipelineStatus& status = pipeline.status();
+        const std::size_t cap =
+            status.budget_unreachable ? std::max(budget, status.minimum_triangles) : budget;
+        EXPECT_LE(client.triangle_count(), cap) << "step " << step;
+        EXPECT_EQ(client.triangle_count(), pipeline.stats().triangles) << "step " << step;
+        if (s.converged) return client;
+    }
+    ADD_FAILURE() << "did not converge";
+    return client;
+}
+
+/// At convergence: the budget met within one, or the fewest triangles the topology allowed; a
+/// valid mesh with the topology of the phase-1 mesh.
+void expect_converged_at_budget(const Surface& surface, const std::shared_ptr<const Field>& field,
+                                const Pipeline& pipeline, std::size_t budget) {
+    const PipelineStatus& status = pipeline.status();
+    const RefinedMesh mesh = pipeline.mesh();
+    if (status.budget_unreachable) {
+        EXPECT_GT(status.minimum_triangles, budget);
+        EXPECT_EQ(mesh.mesh.triangle_count(), status.minimum_triangles);
+    } else {
+        EXPECT_LE(mesh.mesh.triangle_count(), budget);
+        EXPECT_GE(mesh.mesh.triangle_count() + 1, budget);
+    }
+    test::expect_valid_mesh(*field, mesh.mesh, surface.box, test::BaseEdges::any);
+    PolygonizeSettings phase1 = refinement_phase1_settings();
+    phase1.box = surface.box;
+    const TopologyReport fresh = analyze_topology(polygonize(*field, phase1).mesh);
+    const TopologyReport got = analyze_topology(mesh.mesh);
+    EXPECT_EQ(got.components, fresh.components);
+    EXPECT_EQ(got.euler_characteristic, fresh.euler_characteristic);
+    EXPECT_EQ(got.boundary_edges == 0, fresh.boundary_edges == 0);
+}
+
+struct BudgetCase {
+    Surface surface;
+    std::size_t budget;
+};
+
+void PrintTo(const BudgetCase& c, std::ostream* os) {
+    *os << c.surface.name << "_" << c.budget;
+}
+
+class PipelineBudget : public ::testing::TestWithParam<BudgetCase> {};
+
+std::vector<BudgetCase> budget_cases() {
+    std::vector<BudgetCase> cases;
+    for (const Surface& s : {kTorus, kTanglecube, kGyroid, kHeart, kGenusTwo})
+        for (std::size_t budget : {100u, 1000u, 20000u}) cases.push_back({s, budget});
+    return cases;
+}
+
+INSTANTIATE_TEST_SUITE_P(Pipeline, PipelineBudget, ::testing::ValuesIn(budget_cases()));
+
+TEST_P(PipelineBudget, step_bounds_every_frame_and_meets_the_budget) {
+    const BudgetCase& c = GetParam();
+    const auto field = test::field_of(c.surface.expression);
+    Pipeline pipeline(field, settings_for(c.surface.box, c.budget));
+    step_to_convergence(pipeline, c.budget);
+    expect_converged_at_budget(c.surface, field, pipeline, c.budget);
+}
+
+// The blobby cube's phase 1 is the longest of all: one run, then the budget lowered and raised.
+TEST(PipelineBudgetBlobbyCube, step_bounds_every_frame_and_meets_each_budget) {
+    const auto field = test::field_of(kBlobbyCube.expression);
+    Pipeline pipeline(field, settings_for(kBlobbyCube.box, 20000));
+    DeltaMesh client = step_to_convergence(pipeline, 20000);
+    expect_converged_at_budget(kBlobbyCube, field, pipeline, 20000);
+    for (std::size_t budget : {1000u, 100u, 20000u}) {
+        pipeline.set_constraint(Constraint::triangle_budget(budget));
+        client = step_to_convergence(pipeline, budget, std::move(client));
+        expect_converged_at_budget(kBlobbyCube, field, pipeline, budget);
+    }
+}
+
+// A first mesh of any function within the first step's budget: octree cells are classified
+// until the budget (here counted in evaluation calls) runs out or the frontier reaches
+// first_mesh_cells, then meshed.
+TEST(Pipeline, step_makes_a_first_mesh_within_its_budget) {
+    const Surface bear{"bear", "@" ISOMESH_SHARED_DIR "/testdata/vm/bear.vm", cube(1)};
+    const Surface colonnade{"colonnade", "@" ISOMESH_SHARED_DIR "/testdata/vm/colonnade.vm",
+                            cube(1)};
+    for (const Surface& surface : {kBlobbyCube, kTanglecube, kHeart, bear, colonnade}) {
+        SCOPED_TRACE(surface.name);
+        auto counter = std::make_shared<test::EvaluationCounter>();
+        const auto field =
+            std::make_shared<test::CountingField>(test::field_of(surface.expression), counter);
+        const PipelineSettings settings = settings_for(surface.box, 20000);
+        Pipeline pipeline(field, settings);
+        constexpr std::int64_t kBudget = 2000;  // evaluation calls
+        pipeline.step(WorkBudget(kBudget, counter->clock()));
+        ASSERT_TRUE(pipeline.started());
+        // Classification stops within one group of siblings (8 interval evaluations and their
+        // edge surveys) after the budget; meshing is bounded by the cell cap.
+        const PolygonizeStats& first = pipeline.phase1_stats();
+        EXPECT_LE(first.cells, settings.first_mesh_cells + 8 * 8);
+        EXPECT_GT(first.triangles, 0u);
+    }
+}
+
+// Regions where the equation holds are no surface: said at once, with an empty mesh.
+TEST(Pipeline, step_recognises_regions_where_the_equation_holds) {
+    for (const char* expression :
+         {"floor(x)=0", "min(x,0)=0", "max(x^2+y^2+z^2-1,0)=0", "0", "x=x"}) {
+        SCOPED_TRACE(expression);
+        auto counter = std::make_shared<test::EvaluationCounter>();
+        const auto field =
+            std::make_shared<test::CountingField>(test::field_of(expression), counter);
+        Pipeline pipeline(field, settings_for(cube(2), 20000));
+        const PipelineStep step = pipeline.step(WorkBudget(10000, WorkBudget::thread_cpu_clock()));
+        EXPECT_TRUE(step.converged);
+        EXPECT_TRUE(pipeline.status().region);
+        EXPECT_EQ(pipeline.stats().triangles, 0u);
+        EXPECT_LT(counter->calls.load(), 20000);  // milliseconds of work, no growth
+    }
+}
+
+// Cancellation (a new version, a close, a shutdown) is honoured in every loop: whenever it is
+// raised, the step returns within a few evaluation calls.
+TEST(Pipeline, step_honours_cancellation_in_every_loop) {
+    const auto inner = test::field_of("x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8=0");
+    // The whole run's evaluation calls, to place cancellations all along it.
+    auto probe = std::make_shared<test::EvaluationCounter>();
+    {
+        Pipeline pipeline(std::make_shared<test::CountingField>(inner, probe),
+                          settings_for(cube(3), 20000));
+        pipeline.run_to_convergence();
+    }
+    const std::int64_t total = probe->calls.load();
+    ASSERT_GT(total, 1000);
+    std::int64_t worst = 0;
+    for (int k = 1; k <= 40; ++k) {
+        auto counter = std::make_shared<test::EvaluationCounter>();
+        counter->cancel_at = total * k / 41;
+        Pipeline pipeline(std::make_shared<test::CountingField>(inner, counter),
+                          settings_for(cube(3), 20000));
+        for (int step = 0; step < 100000; ++step) {
+            const PipelineStep s = pipeline.step(WorkBudget(&counter->cancel));
+            if (s.converged || s.cancelled) break;
+        }
+        ASSERT_TRUE(counter->cancel.load()) << "cancel at " << counter->cancel_at;
+        worst = std::max(worst, counter->calls.load() - counter->calls_when_cancelled.load());
+    }
+    std::printf("most evaluation calls after a cancellation: %lld\n",
+                static_cast<long long>(worst));
+    EXPECT_LE(worst, 64);
+}
+
+// A new version with the same topology keeps the mesh, moved onto the new surface; one that
+// changes the topology replaces it with the new function's phase-1 mesh.
+TEST(Pipeline, set_field_keeps_or_replaces_the_mesh_by_topology) {
+    const auto sphere = [](double a) { return test::field_of("x^2+y^2+z^2=" + std::to_string(a)); };
+    Pipeline pipeline(sphere(4.0), settings_for(cube(3), 3000));
+    DeltaMesh client = step_to_convergence(pipeline, 3000);
+    const std::size_t restarts = pipeline.counters().restarts;
+    pipeline.set_field(sphere(5.0));
+    client = step_to_convergence(pipeline, 3000, std::move(client));
+    EXPECT_EQ(pipeline.counters().restarts, restarts);  // moved, not replaced
+    test::expect_valid_mesh(*sphere(5.0), pipeline.mesh().mesh, cube(3), test::BaseEdges::any);
+
+    // Two spheres merging into one: the topology changes, the mesh is replaced.
+    const auto pair = [](double d) {
+        return test::field_of("min((x-" + std::to_string(d) + ")^2+y^2+z^2,(x+" +
+                              std::to_string(d) + ")^2+y^2+z^2)=1");
+    };
+    Pipeline two(pair(1.5), settings_for(cube(3), 3000));
+    client = step_to_convergence(two, 3000);
+    EXPECT_EQ(analyze_topology(two.mesh().mesh).components, 2u);
+    two.set_field(pair(0.5));
+    client = step_to_convergence(two, 3000, std::move(client));
+    EXPECT_EQ(analyze_topology(two.mesh().mesh).components, 1u);
+    test::expect_valid_mesh(*pair(0.5), two.mesh().mesh, cube(3), test::BaseEdges::any);
+}
+
+}  // namespace
+}  // namespace isomesh
