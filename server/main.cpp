@@ -14,6 +14,7 @@
 #include "server/mesh_service.h"
 #include "server/metrics.h"
 #include "server/net/http_server.h"
+#include "server/resources.h"
 
 namespace {
 
@@ -81,6 +82,7 @@ void raise_file_limit(Logger& logger) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    configure_allocator();
     ServerConfig defaults;
     defaults.web_root = ISOMESH_DEFAULT_WEB_ROOT;
     const std::vector<std::string_view> args(argv + 1, argv + argc);

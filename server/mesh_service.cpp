@@ -502,6 +502,7 @@ void MeshService::housekeeping() {
     constexpr auto kTick = std::chrono::milliseconds(100);
     std::uint64_t splits_before = metrics_.splits.value();
     std::uint64_t ended_before = sessions_ended_;
+    bool trim_again = false;
     Clock::time_point second_start = Clock::now();
     std::unique_lock lock(housekeeping_mutex_);
     while (!stopping_) {
@@ -515,8 +516,11 @@ void MeshService::housekeeping() {
                 static_cast<double>(splits - splits_before) / seconds_between(second_start, now)));
             splits_before = splits;
             second_start = now;
-            // Sessions ended: give their memory back to the system (once a second at most).
-            if (sessions_ended_ != ended_before) {
+            // Sessions ended: give their memory back to the system (once a second at most), and
+            // again a second later: a session's last turn and its connections' queued frames
+            // may free their memory after it left the registry.
+            if (sessions_ended_ != ended_before || trim_again) {
+                trim_again = sessions_ended_ != ended_before;
                 ended_before = sessions_ended_;
                 release_free_memory();
             }

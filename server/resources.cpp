@@ -29,4 +29,8 @@ void release_free_memory() {
     malloc_trim(0);
 }
 
+void configure_allocator() {
+    mallopt(M_MMAP_THRESHOLD, 256 * 1024);
+}
+
 }  // namespace isomesh::server

@@ -20,6 +20,15 @@ std::uint64_t resident_bytes();
 /// process's resident size falls back instead of staying at its peak.
 void release_free_memory();
 
+/// Sets up glibc's allocator for a long-running server, before any thread starts: blocks of
+/// 256 KiB and more (meshes' vectors, frames) are mapped on their own and unmapped when freed.
+/// By default the threshold grows with every large block freed, after which such blocks come
+/// from the worker threads' arenas, whose pages malloc_trim cannot free while small blocks live
+/// among them (measured with two 100,000-triangle sessions: 38 MB of 114 MB still resident after
+/// they ended and a trim, 11 MB with the fixed threshold; jemalloc kept more, see the report in
+/// bench/soak.mjs part 5).
+void configure_allocator();
+
 /// A session's memory from what it holds. The figures are measured, not derived: the resident
 /// growth of isomesh-server per triangle of converged sessions (bench/soak.mjs, "memory per
 /// triangle": refiner with its split hierarchy and queues, the wire mirror, the encoder's

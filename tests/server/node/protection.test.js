@@ -334,13 +334,15 @@ describe('limits', () => {
       const start = server.status().rssKb;
       const connection = await client(server);
       const sessions = await Promise.all([0, 1].map((k) =>
-        connection.create({ expression: 'x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8=0', box: [-3, 3 + 0.1 * k, -3, 3, -3, 3], constraints: { triangles: 100000 } })));
+        connection.create({ expression: 'x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8=0', box: [-3, 3 + 0.1 * k, -3, 3, -3, 3], constraints: { triangles: 60000 } })));
       await Promise.all(sessions.map((s) => converged(s, 60000)));
       const peak = server.status().rssKb;
       connection.close();
       await until(async () => (await server.metrics()).get('isomesh_sessions') === 0, { what: 'the sessions to expire' });
-      // Freed memory is handed back within a second or two (the housekeeper trims once a second).
-      await until(() => server.status().rssKb - start < (peak - start) / 3, {
+      // Freed memory is handed back within a second or two (large blocks are unmapped when freed,
+      // the rest trimmed once a second): measured, 9% of the growth stays; with neither, over
+      // half did, and with unmapping alone a quarter.
+      await until(() => server.status().rssKb - start < (peak - start) / 4, {
         timeoutMs: 10000,
         what: `resident memory to fall from ${peak} kB (start ${start} kB)`,
       });
