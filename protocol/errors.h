@@ -27,9 +27,12 @@ enum class ErrorCode {
     bad_frame,            ///< a binary frame is malformed (used by frame decoders)
     store_unavailable,    ///< the session store is down: no new session or update for now
     wrong_route,          ///< the session belongs to another route (PROTOCOL.md, 1 Connection)
+    read_only,            ///< the request needs the control id; it named the view id
+    server_busy,          ///< the server is at its session or memory limit: try again later
+    resource_limit,       ///< the session used up its memory or CPU-time budget
 };
 
-inline constexpr int kErrorCodeCount = static_cast<int>(ErrorCode::wrong_route) + 1;
+inline constexpr int kErrorCodeCount = static_cast<int>(ErrorCode::resource_limit) + 1;
 
 /// The code's wire name, e.g. "bad_json".
 std::string_view to_string(ErrorCode code);

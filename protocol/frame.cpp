@@ -130,6 +130,17 @@ void write_frame_header(const FrameHeader& h, std::span<std::uint8_t, kFrameHead
     put(out, 72, h.mesh_bytes);
 }
 
+std::vector<std::uint8_t> with_session(std::span<const std::uint8_t> frame,
+                                       const SessionId& session) {
+    std::vector<std::uint8_t> out(frame.begin(), frame.end());
+    std::copy(session.bytes.begin(), session.bytes.end(), out.begin() + 8);
+    return out;
+}
+
+std::uint64_t frame_sequence(std::span<const std::uint8_t> frame) {
+    return frame.size() >= kFrameHeaderBytes ? get<std::uint64_t>(frame, 24) : 0;
+}
+
 Result<FrameHeader> read_frame_header(std::span<const std::uint8_t> in) {
     if (in.size() < kFrameHeaderBytes) return frame_error("frame shorter than its 76-byte header");
     if (!std::equal(kFrameMagic.begin(), kFrameMagic.end(), in.begin())) {

@@ -75,6 +75,14 @@ struct FrameHeader : FrameInfo {
 
 void write_frame_header(const FrameHeader& header, std::span<std::uint8_t, kFrameHeaderBytes> out);
 
+/// A copy of a frame (at least its header) naming `session` instead: what holders of a session's
+/// view id receive.
+std::vector<std::uint8_t> with_session(std::span<const std::uint8_t> frame,
+                                       const SessionId& session);
+
+/// The sequence number in a frame's header (0 for anything shorter than a header).
+std::uint64_t frame_sequence(std::span<const std::uint8_t> frame);
+
 /// Reads and validates a header: magic, version, kind, count limits, a keyframe removing nothing,
 /// the implicit id range base + count staying <= kMaxTriangleId, and mesh_bytes = 0 exactly when
 /// triangle_count = 0. Section lengths are checked against the frame by decode_frame.

@@ -85,6 +85,8 @@ ordered_json write(const StateReply<T>& m) {
     out["parameters"] = parameters_json(m.state.parameters);
     out["box"] = box_json(m.state.box);
     out["constraints"] = constraints_json(m.state.constraints);
+    if (m.view) out["view"] = m.view->to_hex();
+    if (m.access) out["access"] = to_string(*m.access);
     return out;
 }
 
@@ -98,6 +100,17 @@ ordered_json write(const Ack& m) {
 ordered_json write(const Pong& m) {
     ordered_json out = envelope(MessageType::pong, m.id);
     out["time_us"] = m.time_us;
+    if (m.limits) {
+        const ServerLimits& l = *m.limits;
+        out["limits"] = {{"message_bytes", l.message_bytes},
+                         {"sessions_per_connection", l.sessions_per_connection},
+                         {"triangles", l.triangles},
+                         {"session_memory_bytes", l.session_memory_bytes},
+                         {"eval_cpu_s", l.eval_cpu_s},
+                         {"session_cpu_s", l.session_cpu_s},
+                         {"idle_timeout_s", l.idle_timeout_s},
+                         {"orphan_timeout_s", l.orphan_timeout_s}};
+    }
     return out;
 }
 

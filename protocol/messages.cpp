@@ -5,6 +5,7 @@
 // is checked on the raw text before parsing so that no input can make the parser recurse deeply.
 #include "protocol/messages.h"
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <utility>
@@ -20,7 +21,8 @@ constexpr std::array<std::string_view, kErrorCodeCount> kErrorCodeNames = {
     "bad_json",         "unsupported_version", "unknown_type", "bad_field",
     "unknown_session",  "bad_expression",      "too_large",    "too_many_sessions",
     "budget_too_large", "eval_timeout",        "unavailable",  "internal",
-    "bad_frame",        "store_unavailable",   "wrong_route",
+    "bad_frame",        "store_unavailable",   "wrong_route",  "read_only",
+    "server_busy",      "resource_limit",
 };
 
 constexpr std::array<std::string_view, 18> kMessageTypeNames = {
@@ -33,6 +35,8 @@ constexpr std::array<std::string_view, 5> kCloseReasonNames = {"closed", "expire
                                                                "error", "moved"};
 constexpr std::array<std::string_view, 3> kOutcomeNames = {"surface", "no_surface",
                                                            "region_not_surface"};
+
+constexpr std::array<std::string_view, 2> kAccessNames = {"control", "view"};
 
 template <class Enum, std::size_t N>
 std::optional<Enum> enum_from_name(const std::array<std::string_view, N>& names,
@@ -195,21 +199,27 @@ class FieldReader {
 
 // ---- readers of the shared field types -----------------------------------------------------
 
+/// A request id's JSON value as a RequestId, or nothing when it is not a valid one.
+std::optional<RequestId> request_id_from_json(const json& value) {
+    if (value.is_string()) {
+        const auto& text = value.get_ref<const std::string&>();
+        if (utf8_characters(text) <= kMaxRequestIdCharacters) return RequestId(text);
+    } else if (value.is_number_unsigned()) {
+        const auto n = value.get<std::uint64_t>();
+        if (n <= kMaxSafeInteger) return RequestId(static_cast<std::int64_t>(n));
+    } else if (value.is_number_integer()) {
+        const auto n = value.get<std::int64_t>();
+        if (n >= -static_cast<std::int64_t>(kMaxSafeInteger)) return RequestId(n);
+    }
+    return std::nullopt;
+}
+
 std::optional<RequestId> read_request_id(FieldReader& in) {
     const json* value = in.find("id");
     if (!value) return std::nullopt;
-    if (value->is_string()) {
-        const auto& text = value->get_ref<const std::string&>();
-        if (text.size() <= kMaxRequestIdBytes) return RequestId(text);
-    } else if (value->is_number_unsigned()) {
-        const auto n = value->get<std::uint64_t>();
-        if (n <= kMaxSafeInteger) return RequestId(static_cast<std::int64_t>(n));
-    } else if (value->is_number_integer()) {
-        const auto n = value->get<std::int64_t>();
-        if (n >= -static_cast<std::int64_t>(kMaxSafeInteger)) return RequestId(n);
-    }
+    if (auto id = request_id_from_json(*value)) return id;
     in.fail_field("id", "must be an integer with |id| < 2^53 or a string of at most " +
-                            std::to_string(kMaxRequestIdBytes) + " bytes");
+                            std::to_string(kMaxRequestIdCharacters) + " characters");
     return std::nullopt;
 }
 
@@ -258,9 +268,10 @@ std::optional<Parameters> read_parameters(FieldReader& in, bool required,
     }
     Parameters parameters;
     for (const auto& [name, value] : values.items()) {
-        if (name.empty() || name.size() > kMaxParameterNameBytes) {
+        if (name.empty() || utf8_characters(name) > kMaxParameterNameCharacters) {
             in.fail_field("parameters", "names must have 1 to " +
-                                            std::to_string(kMaxParameterNameBytes) + " bytes");
+                                            std::to_string(kMaxParameterNameCharacters) +
+                                            " characters");
             return std::nullopt;
         }
         const auto x = object->number(name, true, -HUGE_VAL);
@@ -401,6 +412,22 @@ SessionState read_state(FieldReader& in, const ParseLimits& limits) {
     return s;
 }
 
+std::optional<SessionId> read_view(FieldReader& in) {
+    const auto hex = in.string("view", false, 64);
+    if (!hex) return std::nullopt;
+    auto id = SessionId::from_hex(*hex);
+    if (!id) in.fail_field("view", "must be 32 hex digits");
+    return id;
+}
+
+std::optional<Access> read_access(FieldReader& in) {
+    const auto name = in.string("access", false, 32);
+    if (!name) return std::nullopt;
+    auto access = enum_from_name<Access>(kAccessNames, *name);
+    if (!access) in.fail_field("access", "must be control or view");
+    return access;
+}
+
 template <class Reply>
 ServerMessage read_state_reply(FieldReader& in, std::optional<RequestId> id,
                                const ParseLimits& limits) {
@@ -408,6 +435,32 @@ ServerMessage read_state_reply(FieldReader& in, std::optional<RequestId> id,
     m.id = std::move(id);
     m.session = read_session(in).value_or(SessionId{});
     m.state = read_state(in, limits);
+    m.view = read_view(in);
+    m.access = read_access(in);
+    return m;
+}
+
+std::optional<ServerLimits> read_limits(FieldReader& in) {
+    auto object = in.object("limits", false);
+    if (!object) return std::nullopt;
+    ServerLimits l;
+    l.message_bytes = read_count(*object, "message_bytes");
+    l.sessions_per_connection = read_count(*object, "sessions_per_connection");
+    l.triangles = read_count(*object, "triangles");
+    l.session_memory_bytes = read_count(*object, "session_memory_bytes");
+    l.eval_cpu_s = read_double(*object, "eval_cpu_s");
+    l.session_cpu_s = read_double(*object, "session_cpu_s");
+    l.idle_timeout_s = read_double(*object, "idle_timeout_s");
+    l.orphan_timeout_s = read_double(*object, "orphan_timeout_s");
+    in.adopt(object->error());
+    return l;
+}
+
+ServerMessage read_pong(FieldReader& in, std::optional<RequestId> id) {
+    Pong m;
+    m.id = std::move(id);
+    m.time_us = in.unsigned_integer("time_us", true, 0, kMaxSafeInteger).value_or(0);
+    m.limits = read_limits(in);
     return m;
 }
 
@@ -507,8 +560,7 @@ ServerMessage read_server_body(MessageType type, FieldReader& in, std::optional<
         case MessageType::ack:
             return read_ack(in, std::move(id));
         case MessageType::pong:
-            return Pong{std::move(id),
-                        in.unsigned_integer("time_us", true, 0, kMaxSafeInteger).value_or(0)};
+            return read_pong(in, std::move(id));
         case MessageType::progress:
             return read_progress(in);
         case MessageType::converged:
@@ -525,6 +577,7 @@ ServerMessage read_server_body(MessageType type, FieldReader& in, std::optional<
 /// The parsed JSON document and what its envelope ("v", "type", "id") says.
 struct Envelope {
     json document;
+    bool parsed = false;  // document holds the text's JSON
     std::optional<MessageType> type;
     std::optional<RequestId> id;
     std::optional<Error> error;
@@ -545,6 +598,7 @@ Envelope read_envelope(std::string_view text, const ParseLimits& limits, bool fr
     }
     try {
         e.document = json::parse(text);
+        e.parsed = true;
     } catch (const json::parse_error& failure) {
         e.error =
             Error{ErrorCode::bad_json, "invalid JSON at byte " + std::to_string(failure.byte)};
@@ -595,6 +649,10 @@ std::string_view to_string(Closed::Reason reason) {
     return kCloseReasonNames[static_cast<std::size_t>(reason)];
 }
 
+std::string_view to_string(Access access) {
+    return kAccessNames[static_cast<std::size_t>(access)];
+}
+
 std::string_view to_string(Outcome outcome) {
     return kOutcomeNames[static_cast<std::size_t>(outcome)];
 }
@@ -634,6 +692,8 @@ std::optional<SessionId> SessionId::from_hex(std::string_view hex) {
 Result<ClientMessage, RequestError> parse_client_message(std::string_view text,
                                                          const ParseLimits& limits) {
     Envelope e = read_envelope(text, limits, true);
+    // A message that was never parsed (too large, too deep, not JSON) may still name its id.
+    if (e.error && !e.parsed) e.id = scan_request_id(text);
     if (e.error) return RequestError{*e.error, e.id};
     FieldReader in(e.document, "");
     read_request_id(in);  // marks the envelope's keys as known
@@ -660,6 +720,117 @@ ErrorReply to_reply(const RequestError& rejected) {
     reply.code = rejected.error.code;
     reply.message = rejected.error.message;
     return reply;
+}
+
+// ---- RequestIdScanner -------------------------------------------------------------------------
+
+namespace {
+// A request id's value is at most 64 characters: 64 escapes of 12 bytes (\uXXXX\uXXXX) at most.
+constexpr std::size_t kMaxIdValueBytes = 2 + 12 * kMaxRequestIdCharacters;
+bool json_space(char c) {
+    return c == ' ' || c == '\t' || c == '\n' || c == '\r';
+}
+}  // namespace
+
+void RequestIdScanner::feed(std::string_view text) {
+    for (char c : text) {
+        if (done_) return;
+        if (in_string_) {
+            if (depth_ == 1) capture(c);
+            if (escaped_) {
+                escaped_ = false;
+            } else if (c == '\\') {
+                escaped_ = true;
+            } else if (c == '"') {
+                in_string_ = false;
+                if (depth_ == 1) top_level(c);
+            }
+        } else if (c == '"') {
+            in_string_ = true;
+            if (depth_ == 1) top_level(c);
+        } else if (c == '{' || c == '[') {
+            if (depth_ == 1 && phase_ == Phase::before_value && key_is_id_) done_ = true;
+            if (depth_ == 1 && phase_ == Phase::before_value) phase_ = Phase::after_value;
+            ++depth_;
+        } else if (c == '}' || c == ']') {
+            if (depth_ == 1) top_level(c);
+            --depth_;
+        } else if (depth_ == 1) {
+            top_level(c);
+        }
+    }
+}
+
+/// A character outside strings at depth 1, or a quote opening or closing a string there.
+void RequestIdScanner::top_level(char c) {
+    switch (phase_) {
+        case Phase::before_key:
+            if (c == '"') phase_ = Phase::in_key, key_.clear();
+            break;
+        case Phase::in_key:  // the closing quote (the key's characters went to capture)
+            key_is_id_ = key_ == "id";
+            phase_ = Phase::after_key;
+            break;
+        case Phase::after_key:
+            if (c == ':') phase_ = Phase::before_value;
+            break;
+        case Phase::before_value:
+            if (json_space(c)) break;
+            phase_ = Phase::in_value;
+            value_is_string_ = c == '"';
+            value_.clear();
+            if (!value_is_string_) capture(c);
+            break;
+        case Phase::in_value:
+            if (value_is_string_ || c == ',' || c == '}' || json_space(c)) {
+                if (key_is_id_) done_ = true;
+                phase_ = c == ',' ? Phase::before_key : Phase::after_value;
+            } else {
+                capture(c);
+            }
+            break;
+        case Phase::after_value:
+            if (c == ',') phase_ = Phase::before_key;
+            break;
+    }
+}
+
+void RequestIdScanner::capture(char c) {
+    if (phase_ == Phase::in_key) {
+        if (c != '"' && key_.size() < 3)
+            key_ += c;
+        else if (c != '"')
+            key_ = "???";  // longer than "id"
+    } else if (phase_ == Phase::in_value && key_is_id_) {
+        if (value_.size() >= kMaxIdValueBytes) {
+            done_ = true;
+            value_.clear();
+            return;
+        }
+        value_ += c;
+    }
+}
+
+std::optional<RequestId> RequestIdScanner::id() const {
+    if (!done_ || !key_is_id_ || value_.empty()) return std::nullopt;
+    const std::string token = value_is_string_ ? "\"" + value_ : value_;
+    try {
+        return request_id_from_json(json::parse(token));
+    } catch (const json::exception&) {
+        return std::nullopt;
+    }
+}
+
+std::optional<RequestId> scan_request_id(std::string_view text) {
+    RequestIdScanner scanner;
+    scanner.feed(text);
+    return scanner.id();
+}
+
+std::size_t utf8_characters(std::string_view text) {
+    return static_cast<std::size_t>(std::count_if(text.begin(), text.end(), [](char c) {
+        return (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+    }));
 }
 
 }  // namespace isomesh::protocol

@@ -144,13 +144,25 @@ struct SessionState {
     friend bool operator==(const SessionState&, const SessionState&) = default;
 };
 
-/// The replies that describe a session: `created`, `updated`, `subscribed`.
+/// What the session id a connection holds allows: `control` (the id `created` returns: every
+/// request) or `view` (the read-only id: subscribe, unsubscribe and resync only).
+enum class Access { control, view };
+
+/// The access's name on the wire ("control", "view").
+std::string_view to_string(Access access);
+
+/// The replies that describe a session: `created`, `updated`, `subscribed`. `updated` without an
+/// id also tells every other subscriber of a new version made by someone else.
 template <MessageType T>
 struct StateReply {
     static constexpr MessageType type = T;
     std::optional<RequestId> id;
-    SessionId session;
+    SessionId session;  ///< the id the receiving connection holds (control or view)
     SessionState state;
+    /// The session's read-only id, sent only to holders of the control id.
+    std::optional<SessionId> view = std::nullopt;
+    /// What `session` allows; absent in messages of servers that predate view ids.
+    std::optional<Access> access = std::nullopt;
     friend bool operator==(const StateReply&, const StateReply&) = default;
 };
 using Created = StateReply<MessageType::created>;
@@ -165,9 +177,23 @@ struct Ack {
     friend bool operator==(const Ack&, const Ack&) = default;
 };
 
+/// The server's limits a client can learn (the `limits` of `pong`).
+struct ServerLimits {
+    std::uint64_t message_bytes = 0;            ///< largest control message accepted
+    std::uint64_t sessions_per_connection = 0;  ///< sessions a connection may create and keep
+    std::uint64_t triangles = 0;                ///< largest triangle budget
+    std::uint64_t session_memory_bytes = 0;     ///< memory one session may hold
+    double eval_cpu_s = 0;        ///< CPU time phase 1 of one function version may take
+    double session_cpu_s = 0;     ///< CPU time one session may take over its life
+    double idle_timeout_s = 0;    ///< a session without requests for this long expires
+    double orphan_timeout_s = 0;  ///< a session without subscribers for this long expires
+    friend bool operator==(const ServerLimits&, const ServerLimits&) = default;
+};
+
 struct Pong {
     std::optional<RequestId> id;
     std::uint64_t time_us = 0;  ///< server clock, microseconds since the Unix epoch
+    std::optional<ServerLimits> limits = std::nullopt;
     friend bool operator==(const Pong&, const Pong&) = default;
 };
 
@@ -241,8 +267,9 @@ using ServerMessage =
 
 // ---- parsing and serializing ------------------------------------------------------------------
 
-inline constexpr std::size_t kMaxRequestIdBytes = 64;
-inline constexpr std::size_t kMaxParameterNameBytes = 64;
+/// String lengths are counted in characters (Unicode code points), as JSON Schema's maxLength.
+inline constexpr std::size_t kMaxRequestIdCharacters = 64;
+inline constexpr std::size_t kMaxParameterNameCharacters = 64;
 inline constexpr std::size_t kMaxErrorMeasureBytes = 32;
 inline constexpr std::uint64_t kMaxSafeInteger = (std::uint64_t{1} << 53) - 1;
 
@@ -261,6 +288,36 @@ struct RequestError {
     Error error;
     std::optional<RequestId> id;
 };
+
+/// Finds the top-level "id" of a request that cannot be parsed (too large, nested too deeply,
+/// malformed), fed in pieces of any size: a tolerant scan in constant memory, so that even the
+/// error about a message too large to keep echoes its id. The id is the first top-level "id"
+/// key's value when it is a valid request id.
+class RequestIdScanner {
+  public:
+    void feed(std::string_view text);
+    std::optional<RequestId> id() const;
+
+  private:
+    enum class Phase { before_key, in_key, after_key, before_value, in_value, after_value };
+    void top_level(char c);
+    void capture(char c);
+    int depth_ = 0;
+    bool in_string_ = false;
+    bool escaped_ = false;
+    Phase phase_ = Phase::before_key;
+    std::string key_;
+    std::string value_;
+    bool key_is_id_ = false;
+    bool value_is_string_ = false;
+    bool done_ = false;  // the id's value is complete, or cannot be one
+};
+
+/// RequestIdScanner over a whole text.
+std::optional<RequestId> scan_request_id(std::string_view text);
+
+/// The number of characters (code points) of valid UTF-8 text.
+std::size_t utf8_characters(std::string_view text);
 
 /// Parses a client-to-server message. Unknown fields are rejected (bad_field).
 Result<ClientMessage, RequestError> parse_client_message(std::string_view text,

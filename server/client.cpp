@@ -32,13 +32,9 @@ void Client::send(const protocol::ServerMessage& message, bool droppable) {
     queue_.push_text(std::make_shared<const std::string>(protocol::serialize(message)), droppable);
 }
 
-Client::SubscribeOutcome Client::add_subscription(const protocol::SessionId& session,
-                                                  std::size_t limit) {
+bool Client::add_subscription(const protocol::SessionId& session) {
     std::lock_guard lock(mutex_);
-    if (subscriptions_.contains(session)) return SubscribeOutcome::already;
-    if (subscriptions_.size() >= limit) return SubscribeOutcome::limit;
-    subscriptions_.insert(session);
-    return SubscribeOutcome::added;
+    return subscriptions_.insert(session).second;
 }
 
 bool Client::remove_subscription(const protocol::SessionId& session) {
@@ -61,6 +57,23 @@ std::vector<protocol::SessionId> Client::take_subscriptions() {
     std::vector<protocol::SessionId> out(subscriptions_.begin(), subscriptions_.end());
     subscriptions_.clear();
     return out;
+}
+
+bool Client::reserve_created(std::size_t limit) {
+    std::lock_guard lock(mutex_);
+    if (created_ >= limit) return false;
+    ++created_;
+    return true;
+}
+
+void Client::release_created() {
+    std::lock_guard lock(mutex_);
+    if (created_ > 0) --created_;
+}
+
+std::size_t Client::created_count() const {
+    std::lock_guard lock(mutex_);
+    return created_;
 }
 
 }  // namespace isomesh::server

@@ -1,5 +1,6 @@
-// A WebSocket connection as sessions and request handling see it: its output queue and the
-// sessions it follows. Knows nothing of the network (net/ drives the queue).
+// A WebSocket connection as sessions and request handling see it: its output queue, the sessions
+// it follows (by the id it holds: control or view) and how many of the live sessions it created.
+// Knows nothing of the network (net/ drives the queue).
 #pragma once
 
 #include <array>
@@ -43,9 +44,9 @@ class Client {
     /// Serializes and queues a control message (`droppable`: see OutputQueue::push_text).
     void send(const protocol::ServerMessage& message, bool droppable = false);
 
-    enum class SubscribeOutcome { added, already, limit };
-    /// Adds `session` to the followed sessions unless `limit` are followed already.
-    SubscribeOutcome add_subscription(const protocol::SessionId& session, std::size_t limit);
+    /// Adds `session` (the id this connection holds) to the followed sessions; false when it was
+    /// followed already.
+    bool add_subscription(const protocol::SessionId& session);
     /// False when `session` was not followed.
     bool remove_subscription(const protocol::SessionId& session);
     bool subscribed(const protocol::SessionId& session) const;
@@ -56,12 +57,20 @@ class Client {
     void set_route(std::optional<Route> route) { route_ = route; }
     const std::optional<Route>& route() const { return route_; }
 
+    /// Counts a session this connection creates, unless `limit` of its sessions are live already
+    /// (followed or not: an orphaned session counts until it ends). False at the limit.
+    bool reserve_created(std::size_t limit);
+    /// One of the sessions this connection created has ended (or was never made).
+    void release_created();
+    std::size_t created_count() const;
+
   private:
     const std::uint64_t id_;
     OutputQueue queue_;
     mutable std::mutex mutex_;
     std::set<protocol::SessionId> subscriptions_;
     std::optional<Route> route_;  // set before the first message
+    std::size_t created_ = 0;
 };
 
 }  // namespace isomesh::server

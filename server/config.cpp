@@ -1,5 +1,6 @@
 #include "server/config.h"
 
+#include "server/handshake.h"
 #include "server/store/session_store.h"
 
 #include <algorithm>
@@ -9,6 +10,8 @@
 #include <cmath>
 #include <limits>
 #include <thread>
+
+#include <unistd.h>
 
 namespace isomesh::server {
 namespace {
@@ -113,6 +116,21 @@ Option log_level_option() {
     return {"log-level", "debug, info, warn or error", set, show};
 }
 
+Option allow_origin_option() {
+    Setter set = [](ServerConfig& c, std::string_view text) -> std::optional<std::string> {
+        if (auto problem = check_allow_origin(text)) return "a list of origins: " + *problem;
+        c.allow_origin = std::string(text);
+        return std::nullopt;
+    };
+    Shower show = [](const ServerConfig& c) { return c.allow_origin; };
+    return {"allow-origin",
+            "origins allowed to open a WebSocket, comma-separated, e.g. "
+            "'https://example.org,http://localhost:5173'; '*': any (empty: this server's own "
+            "origin and loopback origins; clients that send no Origin, i.e. not browsers, are "
+            "always allowed)",
+            set, show};
+}
+
 const std::vector<Option>& options() {
     constexpr std::uint64_t kU32 = std::numeric_limits<std::uint32_t>::max();
     constexpr double kDay = 86400;
@@ -134,17 +152,40 @@ const std::vector<Option>& options() {
                        &ServerConfig::draco_speed, 0, 10),
         integer_option("max-message-bytes", "largest control message accepted",
                        &ServerConfig::max_message_bytes, 256, 64 << 20),
-        integer_option("max-sessions-per-connection", "sessions one connection may hold",
+        allow_origin_option(),
+        integer_option("max-sessions-per-connection",
+                       "sessions one connection may have created and not yet ended (orphaned "
+                       "ones count until they expire)",
                        &ServerConfig::max_sessions_per_connection, 1, 1 << 20),
         integer_option("max-connections", "simultaneous WebSocket connections",
                        &ServerConfig::max_connections, 1, 1 << 20),
+        integer_option("max-http-connections",
+                       "simultaneous plain HTTP connections (beyond: the oldest is closed)",
+                       &ServerConfig::max_http_connections, 1, 1 << 20),
+        integer_option("max-sessions", "live sessions in total (beyond: server_busy)",
+                       &ServerConfig::max_sessions, 1, 1 << 20),
+        integer_option("max-memory-mb",
+                       "MiB the sessions may reserve (triangle budget times the bytes a "
+                       "triangle costs) and the process may hold before new sessions get "
+                       "server_busy (0: half the physical memory)",
+                       &ServerConfig::max_memory_mb, 0, 1ull << 30),
+        integer_option("session-memory-mb",
+                       "MiB one session may hold (a larger triangle budget gets "
+                       "budget_too_large; a session growing beyond ends with resource_limit)",
+                       &ServerConfig::session_memory_mb, 1, 1ull << 30),
+        real_option("session-cpu-s",
+                    "CPU seconds one session may use over its life (beyond: resource_limit)",
+                    &ServerConfig::session_cpu_s, 0.001, 365 * kDay),
         integer_option("max-triangles", "largest triangle budget a session may ask for",
                        &ServerConfig::max_triangles, 1, 1ull << 40),
         integer_option("default-triangles", "triangle budget of a session that names none",
                        &ServerConfig::default_triangles, 1, 1ull << 40),
         real_option("default-max-error", "error bound of a session that names none (0: none)",
                     &ServerConfig::default_max_error, 0, 1e300),
-        integer_option("eval-timeout-ms", "time limit of phase 1 for one function version",
+        integer_option("eval-timeout-ms",
+                       "CPU time (of the session's own work, not wall clock) for which phase 1 of "
+                       "a function version examines cells before keeping the mesh it has; a "
+                       "single step running this long ends the session with eval_timeout",
                        &ServerConfig::eval_timeout_ms, 1, kU32),
         integer_option("queue-bytes",
                        "output bytes queued per connection before deltas are dropped",
@@ -153,7 +194,10 @@ const std::vector<Option>& options() {
                     &ServerConfig::idle_timeout_s, 0.01, 365 * kDay),
         real_option("orphan-timeout", "seconds without subscribers after which a session expires",
                     &ServerConfig::orphan_timeout_s, 0, 365 * kDay),
-        real_option("drain-timeout", "seconds queued frames may take to leave at shutdown",
+        real_option("drain-timeout",
+                    "seconds the drain may take (SIGTERM, SIGINT, SIGHUP): sessions are "
+                    "cancelled and closed at once, queued frames leave, then the process exits "
+                    "even if a worker is still busy",
                     &ServerConfig::drain_timeout_s, 0, 3600),
         store_option(),
         string_option("data-dir", "folder of the server's files (the default session store)",
@@ -243,7 +287,13 @@ std::string config_usage(const ServerConfig& defaults) {
         "Serves isosurface meshing sessions over WebSocket at /ws, the browser client at /,\n"
         "/healthz, /readyz and /metrics (Prometheus). Every option may also be set by the "
         "environment\n"
-        "variable shown; the command line wins.\n\noptions:\n";
+        "variable shown; the command line wins.\n\n"
+        "Signals: SIGTERM, SIGINT and SIGHUP drain the server (SIGHUP does not reload): it stops\n"
+        "taking new WebSocket connections and sessions, /healthz and /readyz answer 503\n"
+        "\"draining\", every session ends here with `closed` (reason shutdown, or moved when the\n"
+        "store keeps it), connections close with code 1001 once their queued frames have left,\n"
+        "and the process exits 0 within --drain-timeout (plus about a second), whatever its\n"
+        "workers are doing.\n\noptions:\n";
     for (const Option& option : options()) {
         text += "  --" + std::string(option.name) + " (" + env_name(option.name) + ", default '" +
                 option.show(defaults) + "')\n      " + std::string(option.help) + "\n";
@@ -262,6 +312,14 @@ std::string default_data_dir(const std::function<const char*(const char*)>& gete
     const char* home = getenv("HOME");
     if (home && *home) return std::string(home) + "/.local/state/isomesh";
     return "isomesh-data";
+}
+
+std::uint64_t resolved_max_memory_bytes(const ServerConfig& config) {
+    if (config.max_memory_mb > 0) return config.max_memory_mb << 20;
+    const long pages = sysconf(_SC_PHYS_PAGES);
+    const long page_size = sysconf(_SC_PAGE_SIZE);
+    if (pages <= 0 || page_size <= 0) return std::uint64_t{4} << 30;
+    return static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page_size) / 2;
 }
 
 unsigned resolved_worker_threads(const ServerConfig& config) {

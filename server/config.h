@@ -34,18 +34,37 @@ struct ServerConfig {
     std::uint32_t batch_triangles = 2000;  ///< ... and as soon as this many triangles changed
     unsigned draco_speed = 2;  ///< Draco encoder speed: 0 smallest frames ... 10 fastest
 
+    // access
+    /// Origins (scheme://host[:port]) allowed to open a WebSocket, comma-separated; "*": any.
+    /// Empty: the server's own origin (the request's Host) and loopback origins only. Requests
+    /// without an Origin header (not from a browser) are always allowed.
+    std::string allow_origin;
+
     // limits
     std::size_t max_message_bytes = 1 << 20;  ///< larger control messages get too_large
+    /// Sessions one connection may have created and not yet ended (orphaned ones count until
+    /// they expire).
     std::size_t max_sessions_per_connection = 16;
-    std::size_t max_connections = 1024;
+    std::size_t max_connections = 1024;      ///< WebSocket connections
+    std::size_t max_http_connections = 256;  ///< plain HTTP connections (oldest evicted beyond)
+    std::size_t max_sessions = 256;          ///< live sessions in total
+    /// Memory (MiB) the sessions may reserve and the process may hold before new sessions are
+    /// refused (server_busy); 0: half the physical memory.
+    std::uint64_t max_memory_mb = 0;
+    std::uint64_t session_memory_mb =
+        1280;                     ///< one session's memory budget (MiB): 2,000,000 triangles
+    double session_cpu_s = 3600;  ///< one session's CPU-time budget over its life
     std::uint64_t max_triangles = 2'000'000;  ///< budgets above this get budget_too_large
     std::uint64_t default_triangles = 20'000;
-    double default_max_error = 0.0;          ///< 0: refine to the triangle budget
-    std::uint32_t eval_timeout_ms = 10'000;  ///< phase 1 of one function version
-    std::size_t queue_bytes = 4 << 20;       ///< per-connection output budget (backpressure)
-    double idle_timeout_s = 3600;            ///< a session without requests for this long expires
-    double orphan_timeout_s = 30;  ///< a session without subscribers for this long expires
-    double drain_timeout_s = 5;    ///< SIGTERM: how long queued frames may take to leave
+    double default_max_error = 0.0;  ///< 0: refine to the triangle budget
+    /// CPU time (the session's own thread's) for which phase 1 of a version examines cells; a
+    /// single step running this long fails the session (eval_timeout).
+    std::uint32_t eval_timeout_ms = 10'000;
+    std::size_t queue_bytes = 4 << 20;  ///< per-connection output budget (backpressure)
+    double idle_timeout_s = 3600;       ///< a session without requests for this long expires
+    double orphan_timeout_s = 30;       ///< a session without subscribers for this long expires
+    /// SIGTERM, SIGINT, SIGHUP: how long the drain may take before the process exits anyway.
+    double drain_timeout_s = 5;
 
     // sessions kept across restarts (server/store/session_store.h)
     /// "none", "sqlite:PATH" or "redis://HOST:PORT"; empty: sqlite:DATA_DIR/sessions.db
@@ -81,5 +100,8 @@ std::string resolved_store(const ServerConfig& config);
 /// The default data directory: $XDG_STATE_HOME/isomesh, else $HOME/.local/state/isomesh, else
 /// ./isomesh-data.
 std::string default_data_dir(const std::function<const char*(const char*)>& getenv);
+
+/// The memory limit in bytes: config.max_memory_mb, or half the physical memory when 0.
+std::uint64_t resolved_max_memory_bytes(const ServerConfig& config);
 
 }  // namespace isomesh::server

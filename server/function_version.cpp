@@ -1,5 +1,6 @@
 #include "server/function_version.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "eval/tape_field.h"
@@ -37,6 +38,26 @@ std::optional<ErrorReply> compile(FunctionVersion& version, const VersionLimits&
     version.tape = std::make_shared<const Tape>(std::move(result.tape));
     version.state.expression.reset();
     if (source.kind == protocol::Source::Kind::expression) version.state.expression = source.text;
+    return std::nullopt;
+}
+
+/// A name in `supplied` (this request's parameters) that the function does not use and the
+/// session never had (`had`: the values of its earlier versions; a slider may outlive the term
+/// that used it): a typo, answered with bad_field rather than ignored.
+std::optional<ErrorReply> check_names(const FunctionVersion& version,
+                                      const protocol::Parameters& supplied,
+                                      const protocol::Parameters& had = {}) {
+    const auto& known = version.tape->params;
+    for (const auto& [name, value] : supplied) {
+        if (std::find(known.begin(), known.end(), name) != known.end()) continue;
+        if (had.contains(name)) continue;
+        std::string list;
+        for (const std::string& p : known) list += (list.empty() ? "'" : ", '") + p + "'";
+        return reject(version.request_id, ErrorCode::bad_field,
+                      "parameters: the function has no parameter '" + name + "' (" +
+                          (list.empty() ? std::string("it has none") : "its parameters: " + list) +
+                          ")");
+    }
     return std::nullopt;
 }
 
@@ -108,6 +129,7 @@ VersionResult first_version(const protocol::Create& request, const VersionLimits
                                          error_measure_names().front()};
     if (auto error = set_constraints(version, defaults, request.constraints, limits)) return *error;
     if (auto error = compile(version, limits)) return *error;
+    if (auto error = check_names(version, request.parameters)) return *error;
     if (auto error = bind(version)) return *error;
     return version;
 }
@@ -136,10 +158,19 @@ VersionResult next_version(const FunctionVersion& current, const protocol::Updat
                               " distinct names over the session's updates");
         }
     }
+    if (request.parameters) {
+        if (auto error = check_names(version, *request.parameters, current.values)) return *error;
+    }
     if (request.source || request.parameters) {
         if (auto error = bind(version)) return *error;
     }
     return version;
+}
+
+bool changes_nothing(const FunctionVersion& current, const FunctionVersion& next) {
+    return current.source == next.source && current.state.parameters == next.state.parameters &&
+           current.state.box == next.state.box &&
+           current.state.constraints == next.state.constraints;
 }
 
 }  // namespace isomesh::server

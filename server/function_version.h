@@ -48,4 +48,8 @@ VersionResult first_version(const protocol::Create& request, const VersionLimits
 VersionResult next_version(const FunctionVersion& current, const protocol::Update& request,
                            const VersionLimits& limits);
 
+/// True when `next` meshes exactly what `current` does (same source, parameter values, box and
+/// constraints): an update that changes nothing makes no new version.
+bool changes_nothing(const FunctionVersion& current, const FunctionVersion& next);
+
 }  // namespace isomesh::server

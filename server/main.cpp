@@ -1,4 +1,6 @@
 // isomesh-server: the mesh server. `isomesh-server --help` lists the options.
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -6,11 +8,14 @@
 #include <string_view>
 #include <vector>
 
+#include <sys/resource.h>
+
 #include "server/config.h"
 #include "server/log.h"
 #include "server/mesh_service.h"
 #include "server/metrics.h"
 #include "server/net/http_server.h"
+#include "server/resources.h"
 #include "server/store/session_store.h"
 
 namespace {
@@ -48,8 +53,11 @@ std::optional<std::unique_ptr<store::SessionStore>> open_session_store(const Ser
     return std::move(opened).value();
 }
 
+void raise_file_limit(Logger& logger);
+
 int serve(const ServerConfig& config) {
     Logger logger(config.log_level);
+    raise_file_limit(logger);
     Metrics metrics;
     auto store = open_session_store(config, logger);
     if (!store) return 1;
@@ -76,13 +84,33 @@ int serve(const ServerConfig& config) {
                               {"store", resolved_store(config)},
                               {"worker_threads", resolved_worker_threads(config)}});
     server.run();
+    // The drain cancelled every session; a worker that does not check its cancel flag (a long
+    // phase 1) must not hold the exit past the drain's deadline.
+    const Clock::time_point deadline =
+        std::max(server.drain_deadline(), Clock::now() + std::chrono::milliseconds(100));
+    if (!service.wait_workers(deadline)) {
+        logger.warn("exit_with_busy_workers", {{"busy_workers", metrics.busy_workers.value()}});
+        std::fflush(nullptr);
+        std::_Exit(0);
+    }
     logger.info("stopped");
     return 0;
+}
+
+/// Raises the soft limit on open files to the hard one: every connection holds a descriptor.
+void raise_file_limit(Logger& logger) {
+    rlimit limit{};
+    if (getrlimit(RLIMIT_NOFILE, &limit) != 0 || limit.rlim_cur >= limit.rlim_max) return;
+    const rlim_t before = limit.rlim_cur;
+    limit.rlim_cur = limit.rlim_max;
+    if (setrlimit(RLIMIT_NOFILE, &limit) == 0)
+        logger.debug("file_limit_raised", {{"from", before}, {"to", limit.rlim_cur}});
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+    configure_allocator();
     ServerConfig defaults;
     defaults.web_root = ISOMESH_DEFAULT_WEB_ROOT;
     defaults.data_dir = default_data_dir([](const char* name) { return std::getenv(name); });

@@ -19,14 +19,28 @@ SessionSettings session_settings(const ServerConfig& config) {
     s.batch_interval = std::chrono::milliseconds(config.batch_ms);
     s.batch_triangles = config.batch_triangles;
     s.eval_timeout = std::chrono::milliseconds(config.eval_timeout_ms);
+    s.session_cpu = std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double>(config.session_cpu_s));
+    s.session_memory_bytes = config.session_memory_mb << 20;
     s.encoding_speed = static_cast<int>(config.draco_speed);
     return s;
 }
 
+/// The largest triangle budget: the configured one, or less when a session's memory budget
+/// cannot hold it.
+std::uint64_t max_triangles(const ServerConfig& config) {
+    const std::uint64_t memory = config.session_memory_mb << 20;
+    const std::uint64_t affordable =
+        memory > SessionMemory::kBaseBytes
+            ? (memory - SessionMemory::kBaseBytes) / SessionMemory::kBytesPerTriangle
+            : 1;
+    return std::max<std::uint64_t>(1, std::min(config.max_triangles, affordable));
+}
+
 VersionLimits version_limits(const ServerConfig& config) {
     VersionLimits limits;
-    limits.max_triangles = config.max_triangles;
-    limits.default_triangles = config.default_triangles;
+    limits.max_triangles = max_triangles(config);
+    limits.default_triangles = std::min(config.default_triangles, limits.max_triangles);
     limits.default_max_error = config.default_max_error;
     return limits;
 }
@@ -50,6 +64,14 @@ Clock::duration activity_interval(const ServerConfig& config) {
 
 /// How often a server sharing its store checks that it still owns its live sessions.
 constexpr auto kOwnershipInterval = std::chrono::seconds(1);
+
+/// The ids of a session rebuilt from `record`; a record written before view ids were kept gets a
+/// new one (the caller stores it).
+SessionIds restored_ids(const store::SessionRecord& record, std::uint64_t serial) {
+    SessionIds ids{record.id, record.view, serial};
+    if (ids.view == protocol::SessionId{}) ids.view = random_session_id(route_of(record.id));
+    return ids;
+}
 
 std::string route_hex(const Route& route) {
     protocol::SessionId id;
@@ -122,7 +144,16 @@ MeshService::MeshService(const ServerConfig& config, Logger& logger, Metrics& me
                 }
             }),
       persistence_(std::move(store), metrics, logger),
+      max_memory_bytes_(resolved_max_memory_bytes(config)),
       housekeeper_([this] { housekeeping(); }) {
+    metrics_.sessions_limit.set(static_cast<std::int64_t>(config_.max_sessions));
+    metrics_.sessions_per_connection_limit.set(
+        static_cast<std::int64_t>(config_.max_sessions_per_connection));
+    metrics_.session_memory_limit_bytes.set(
+        static_cast<std::int64_t>(config_.session_memory_mb << 20));
+    metrics_.session_cpu_limit_seconds.set(static_cast<std::int64_t>(config_.session_cpu_s));
+    metrics_.http_connections_limit.set(static_cast<std::int64_t>(config_.max_http_connections));
+    metrics_.memory_limit_bytes.set(static_cast<std::int64_t>(max_memory_bytes_));
     reload();
 }
 
@@ -178,11 +209,20 @@ void MeshService::receive_binary(const std::shared_ptr<Client>& client) {
     request.error(ErrorCode::bad_json, "clients send text messages only (JSON)");
 }
 
+void MeshService::receive_oversized(const std::shared_ptr<Client>& client, std::uint64_t bytes,
+                                    std::optional<protocol::RequestId> id) {
+    metrics_.messages_received.add();
+    Request request{*this, client, std::move(id)};
+    request.error(ErrorCode::too_large, "message of " + std::to_string(bytes) +
+                                            " bytes exceeds the limit of " +
+                                            std::to_string(config_.max_message_bytes));
+}
+
 void MeshService::catch_up(const std::shared_ptr<Client>& client,
                            const std::vector<protocol::SessionId>& sessions) {
     for (const protocol::SessionId& id : sessions) {
-        if (auto session = find(id)) {
-            session->request_keyframe(client, true);
+        if (auto entry = lookup(id)) {
+            entry->session->request_keyframe(client, entry->access, true);
         } else {
             client->queue().forget(id);
         }
@@ -192,55 +232,83 @@ void MeshService::catch_up(const std::shared_ptr<Client>& client,
 void MeshService::disconnect(const std::shared_ptr<Client>& client) {
     client->queue().close();
     for (const protocol::SessionId& id : client->take_subscriptions()) {
-        if (auto session = find(id)) session->unsubscribe(*client);
+        if (auto entry = lookup(id)) entry->session->unsubscribe(*client, entry->access);
     }
 }
 
 // ---- requests ---------------------------------------------------------------------------------
 
 void MeshService::handle(Request& request, const protocol::Create& create) {
-    if (request.client->subscription_count() >= config_.max_sessions_per_connection) {
+    auto& client = request.client;
+    if (!client->reserve_created(config_.max_sessions_per_connection)) {
+        metrics_.sessions_refused[Metrics::kRefusedPerConnection].add();
         request.error(ErrorCode::too_many_sessions,
-                      "this connection already follows " +
+                      "this connection already has " +
                           std::to_string(config_.max_sessions_per_connection) +
-                          " sessions (the server's maximum)");
+                          " live sessions it created (the server's maximum; sessions it no "
+                          "longer follows count until they expire)");
         return;
     }
     VersionResult version = first_version(create, version_limits_);
     if (!version) {
+        client->release_created();
         request.error(version.error());
         return;
     }
-    const protocol::SessionId id = random_session_id(request.client->route());
     const protocol::SessionState state = version.value().state;
-    if (persistence_.save(id, version.value()) != SessionPersistence::Outcome::ok) {
+    const auto& route = client->route();
+    const SessionIds ids{random_session_id(route), random_session_id(route), next_serial_++};
+    std::shared_ptr<MeshSession> session;
+    {
+        std::lock_guard lock(sessions_mutex_);
+        if (auto why = refusal(SessionMemory::projected(*state.constraints.triangles))) {
+            client->release_created();
+            request.error(ErrorCode::server_busy, *why);
+            return;
+        }
+        session = start_session(ids, std::move(version).value(), client);
+    }
+    if (persistence_.save(ids.control, ids.view, session->latest()) !=
+        SessionPersistence::Outcome::ok) {
+        remove(ids.control);  // never announced: nothing to tell anyone
         request.error(ErrorCode::store_unavailable, kStoreDown);
         return;
     }
-    auto session = start_session(id, std::move(version).value());
-    request.client->add_subscription(id, config_.max_sessions_per_connection);
-    request.client->queue().expect_keyframe(id);
-    session->subscribe(request.client, [&] {
-        request.reply(protocol::Created{request.id, id, state});
+    client->add_subscription(ids.control);
+    client->queue().expect_keyframe(ids.control);
+    session->subscribe(client, protocol::Access::control, [&] {
+        request.reply(
+            protocol::Created{request.id, ids.control, state, ids.view, protocol::Access::control});
     });
-    logger_.info("session_created", {{"session", id.to_hex()},
-                                     {"client", request.client->id()},
+    logger_.info("session_created", {{"session", ids.serial},
+                                     {"client", client->id()},
                                      {"expression", state.expression.value_or("(vm)")},
                                      {"triangles", *state.constraints.triangles}});
 }
 
 void MeshService::handle(Request& request, const protocol::Update& update) {
-    auto session = named_session(request, update.session);
-    if (!session) return;
+    auto entry = named_session(request, update.session, true);
+    if (!entry) return;
+    const auto& session = entry->session;
+    if (update.constraints && update.constraints->triangles) {
+        std::lock_guard lock(sessions_mutex_);
+        const std::uint64_t wanted = SessionMemory::projected(*update.constraints->triangles);
+        const std::uint64_t held = session->reservation();
+        if (auto why = wanted > held ? refusal(wanted, held) : std::nullopt) {
+            request.error(ErrorCode::server_busy, *why, update.session);
+            return;
+        }
+    }
     bool moved_away = false;
-    session->update(update, version_limits_, [&](const VersionResult& result) {
+    session->update(update, version_limits_, *request.client, [&](const VersionResult& result) {
         if (!result) {
             protocol::ErrorReply error = result.error();
             error.session = update.session;
             request.error(std::move(error));
             return false;
         }
-        switch (persistence_.save(update.session, result.value())) {  // before `updated` leaves
+        // The record before `updated` leaves.
+        switch (persistence_.save(session->id(), session->view_id(), result.value())) {
             case SessionPersistence::Outcome::ok:
                 break;
             case SessionPersistence::Outcome::moved:
@@ -254,32 +322,28 @@ void MeshService::handle(Request& request, const protocol::Update& update) {
                 request.error(ErrorCode::store_unavailable, kStoreDown, update.session);
                 return false;
         }
-        request.reply(protocol::Updated{request.id, update.session, result.value().state});
+        request.reply(protocol::Updated{request.id, update.session, result.value().state,
+                                        session->view_id(), protocol::Access::control});
         return true;
     });
     if (moved_away) moved({update.session});
 }
 
 void MeshService::handle(Request& request, const protocol::Subscribe& subscribe) {
-    auto session = named_session(request, subscribe.session);
-    if (!session) return;
+    auto entry = named_session(request, subscribe.session, false);
+    if (!entry) return;
     auto& client = request.client;
-    switch (client->add_subscription(subscribe.session, config_.max_sessions_per_connection)) {
-        case Client::SubscribeOutcome::limit:
-            request.error(ErrorCode::too_many_sessions,
-                          "this connection already follows " +
-                              std::to_string(config_.max_sessions_per_connection) +
-                              " sessions (the server's maximum)",
-                          subscribe.session);
-            return;
-        case Client::SubscribeOutcome::already:
-        case Client::SubscribeOutcome::added:
-            break;
-    }
+    const auto& session = entry->session;
+    const protocol::Access access = entry->access;
+    const bool control = access == protocol::Access::control;
+    client->add_subscription(subscribe.session);
     client->queue().expect_keyframe(subscribe.session);
     const protocol::SessionState state = session->latest().state;
-    const bool subscribed = session->subscribe(client, [&] {
-        request.reply(protocol::Subscribed{request.id, subscribe.session, state});
+    const bool subscribed = session->subscribe(client, access, [&] {
+        request.reply(protocol::Subscribed{
+            request.id, subscribe.session, state,
+            control ? std::optional<protocol::SessionId>(session->view_id()) : std::nullopt,
+            access});
     });
     if (!subscribed) {
         client->remove_subscription(subscribe.session);
@@ -289,128 +353,163 @@ void MeshService::handle(Request& request, const protocol::Subscribe& subscribe)
 }
 
 void MeshService::handle(Request& request, const protocol::Unsubscribe& unsubscribe) {
-    auto session = named_session(request, unsubscribe.session);
-    if (!session) return;
+    auto entry = named_session(request, unsubscribe.session, false);
+    if (!entry) return;
     request.client->remove_subscription(unsubscribe.session);
     request.client->queue().forget(unsubscribe.session);
-    session->unsubscribe(*request.client);
+    entry->session->unsubscribe(*request.client, entry->access);
     request.ack(MessageType::unsubscribe, unsubscribe.session);
 }
 
 void MeshService::handle(Request& request, const protocol::Pause& pause) {
-    auto session = named_session(request, pause.session);
-    if (!session) return;
-    session->set_paused(true);
+    auto entry = named_session(request, pause.session, true);
+    if (!entry) return;
+    entry->session->set_paused(true);
     request.ack(MessageType::pause, pause.session);
 }
 
 void MeshService::handle(Request& request, const protocol::Resume& resume) {
-    auto session = named_session(request, resume.session);
-    if (!session) return;
+    auto entry = named_session(request, resume.session, true);
+    if (!entry) return;
     request.ack(MessageType::resume, resume.session);
-    session->set_paused(false);
+    entry->session->set_paused(false);
 }
 
 void MeshService::handle(Request& request, const protocol::Close& close) {
-    if (!named_session(request, close.session)) return;  // one served elsewhere comes here first
+    // A session served elsewhere comes here first.
+    if (!named_session(request, close.session, true)) return;
     auto session = remove(close.session);
     if (!session) {
-        request.error(ErrorCode::unknown_session, "no live session " + close.session.to_hex(),
-                      close.session);
+        request.error(ErrorCode::unknown_session, "the session has ended", close.session);
         return;
     }
     persistence_.remove(close.session);  // before the ack: a closed session never comes back
     request.ack(MessageType::close, close.session);
     session->close(protocol::Closed::Reason::closed);
-    logger_.info("session_closed", {{"session", close.session.to_hex()}, {"reason", "closed"}});
+    logger_.info("session_closed", {{"session", session->serial()}, {"reason", "closed"}});
 }
 
 void MeshService::handle(Request& request, const protocol::Resync& resync) {
-    auto session = named_session(request, resync.session);
-    if (!session) return;
+    auto entry = named_session(request, resync.session, false);
+    if (!entry) return;
     if (!request.client->subscribed(resync.session)) {
-        request.error(ErrorCode::unknown_session,
-                      "this connection does not follow session " + resync.session.to_hex(),
+        request.error(ErrorCode::unknown_session, "this connection does not follow the session",
                       resync.session);
         return;
     }
     request.client->queue().expect_keyframe(resync.session);
     request.ack(MessageType::resync, resync.session);
-    session->request_keyframe(request.client, true);
+    entry->session->request_keyframe(request.client, entry->access, true);
 }
 
 void MeshService::handle(Request& request, const protocol::Ping&) {
-    request.reply(protocol::Pong{request.id, unix_time_us()});
+    request.reply(protocol::Pong{request.id, unix_time_us(), limits()});
 }
 
-std::shared_ptr<MeshSession> MeshService::named_session(Request& request,
-                                                        const protocol::SessionId& id) {
-    auto session = find(id);
-    if (!session) session = restore(request, id);
-    if (!session) return nullptr;
-    session->touch();
-    return session;
+protocol::ServerLimits MeshService::limits() const {
+    protocol::ServerLimits l;
+    l.message_bytes = config_.max_message_bytes;
+    l.sessions_per_connection = config_.max_sessions_per_connection;
+    l.triangles = version_limits_.max_triangles;
+    l.session_memory_bytes = config_.session_memory_mb << 20;
+    l.eval_cpu_s = config_.eval_timeout_ms / 1000.0;
+    l.session_cpu_s = config_.session_cpu_s;
+    l.idle_timeout_s = config_.idle_timeout_s;
+    l.orphan_timeout_s = config_.orphan_timeout_s;
+    return l;
 }
 
-std::shared_ptr<MeshSession> MeshService::restore(Request& request, const protocol::SessionId& id) {
-    if (!persistence_.enabled()) {
-        request.error(ErrorCode::unknown_session, "no live session " + id.to_hex(), id);
-        return nullptr;
+std::optional<MeshService::Entry> MeshService::named_session(Request& request,
+                                                             const protocol::SessionId& id,
+                                                             bool control) {
+    auto entry = lookup(id);
+    if (!entry) entry = restore(request, id);
+    if (!entry) return std::nullopt;
+    if (control && entry->access != protocol::Access::control) {
+        request.error(ErrorCode::read_only,
+                      "this is the session's view id: it can subscribe, unsubscribe and resync; "
+                      "updating, pausing, resuming and closing need the control id",
+                      id);
+        return std::nullopt;
     }
-    if (on_another_route(request, id)) return nullptr;
+    entry->session->touch();
+    return entry;
+}
+
+std::optional<MeshService::Entry> MeshService::restore(Request& request,
+                                                       const protocol::SessionId& id) {
+    if (!persistence_.enabled()) {
+        request.error(ErrorCode::unknown_session, "no live session with this id", id);
+        return std::nullopt;
+    }
+    if (on_another_route(request, id)) return std::nullopt;
     std::lock_guard lock(restore_mutex_);
-    if (auto live = find(id)) return live;  // rebuilt meanwhile for another request
+    if (auto live = lookup(id)) return live;  // rebuilt meanwhile for another request
     auto claimed = persistence_.claim(id);
     if (claimed.outcome == SessionPersistence::Outcome::unavailable) {
         request.error(ErrorCode::store_unavailable, kStoreDown, id);
-        return nullptr;
+        return std::nullopt;
     }
     if (!claimed.record) {
-        request.error(ErrorCode::unknown_session, "no live session " + id.to_hex(), id);
-        return nullptr;
+        request.error(ErrorCode::unknown_session, "no live session with this id", id);
+        return std::nullopt;
     }
-    return rebuild(request, *claimed.record);
+    if (!rebuild(request, *claimed.record)) return std::nullopt;
+    return lookup(id);
 }
 
 bool MeshService::on_another_route(Request& request, const protocol::SessionId& id) {
     const auto& route = request.client->route();
     if (!route || *route == route_of(id) || !persistence_.exists(id)) return false;
     request.error(ErrorCode::wrong_route,
-                  "session " + id.to_hex() + " is served through route " + route_hex(route_of(id)) +
-                      ", not " + route_hex(*route) +
-                      ": connect with ?route=" + route_hex(route_of(id)),
+                  "the session is served through route " + route_hex(route_of(id)) + ", not " +
+                      route_hex(*route) + ": connect with ?route=" + route_hex(route_of(id)),
                   id);
     return true;
 }
 
 std::shared_ptr<MeshSession> MeshService::rebuild(Request& request,
                                                   const store::SessionRecord& record) {
+    const std::uint64_t serial = next_serial_++;
     VersionResult version = restored_version(record, version_limits_);
     if (!version) {
         logger_.warn("session_not_restored",
-                     {{"session", record.id.to_hex()}, {"message", version.error().message}});
+                     {{"session", serial}, {"message", version.error().message}});
         persistence_.remove(record.id);
         protocol::ErrorReply error = version.error();
         error.session = record.id;
         request.error(std::move(error));
         return nullptr;
     }
-    auto session = start_session(record.id, std::move(version).value());
+    std::shared_ptr<MeshSession> session;
+    {
+        std::lock_guard lock(sessions_mutex_);
+        // Its record stays: the session may be rebuilt later, here or on another server.
+        if (auto why =
+                refusal(SessionMemory::projected(*version.value().state.constraints.triangles))) {
+            request.error(ErrorCode::server_busy, *why, record.id);
+            return nullptr;
+        }
+        session = start_session(restored_ids(record, serial), std::move(version).value(), nullptr);
+    }
+    if (session->view_id() != record.view)
+        persistence_.save(session->id(), session->view_id(), session->latest());
     metrics_.sessions_restored.add();
-    logger_.info("session_restored", {{"session", record.id.to_hex()},
-                                      {"version", record.version},
-                                      {"client", request.client->id()}});
+    logger_.info(
+        "session_restored",
+        {{"session", serial}, {"version", record.version}, {"client", request.client->id()}});
     return session;
 }
 
-std::shared_ptr<MeshSession> MeshService::start_session(const protocol::SessionId& id,
-                                                        FunctionVersion version) {
+std::shared_ptr<MeshSession> MeshService::start_session(const SessionIds& ids,
+                                                        FunctionVersion version,
+                                                        const std::shared_ptr<Client>& creator) {
     auto session = std::make_shared<MeshSession>(
-        id, std::move(version),
+        ids, std::move(version),
         SessionServices{pool_, watchdog_, metrics_, logger_, session_settings(config_)},
         [this](const protocol::SessionId& ended_id) { ended(ended_id); });
-    std::lock_guard lock(sessions_mutex_);
-    sessions_[id] = session;
+    sessions_[ids.control] = Entry{session, protocol::Access::control, creator};
+    sessions_[ids.view] = Entry{session, protocol::Access::view, {}};
     return session;
 }
 
@@ -421,35 +520,89 @@ void MeshService::reload() {
     std::size_t restored = 0;
     for (const store::SessionRecord& record :
          persistence_.claim_all(now_us > idle_us ? now_us - idle_us : 0)) {
+        const std::uint64_t serial = next_serial_++;
         VersionResult version = restored_version(record, version_limits_);
         if (!version) {
             logger_.warn("session_not_restored",
-                         {{"session", record.id.to_hex()}, {"message", version.error().message}});
+                         {{"session", serial}, {"message", version.error().message}});
             persistence_.remove(record.id);
             continue;
         }
-        start_session(record.id, std::move(version).value());
+        std::shared_ptr<MeshSession> session;
+        {
+            std::lock_guard lock(sessions_mutex_);
+            session =
+                start_session(restored_ids(record, serial), std::move(version).value(), nullptr);
+        }
+        if (session->view_id() != record.view)
+            persistence_.save(session->id(), session->view_id(), session->latest());
         metrics_.sessions_restored.add();
         ++restored;
     }
     logger_.info("sessions_reloaded", {{"sessions", restored}});
 }
 
-// ---- registry, expiry, shutdown ---------------------------------------------------------------
+// ---- registry, admission, expiry, shutdown ----------------------------------------------------
 
-std::shared_ptr<MeshSession> MeshService::find(const protocol::SessionId& id) const {
+std::optional<MeshService::Entry> MeshService::lookup(const protocol::SessionId& id) const {
     std::lock_guard lock(sessions_mutex_);
     auto it = sessions_.find(id);
-    return it == sessions_.end() ? nullptr : it->second;
+    if (it == sessions_.end()) return std::nullopt;
+    return it->second;
+}
+
+std::shared_ptr<MeshSession> MeshService::find(const protocol::SessionId& id) const {
+    auto entry = lookup(id);
+    return entry ? entry->session : nullptr;
+}
+
+std::uint64_t MeshService::reserved_bytes() const {
+    std::uint64_t total = 0;
+    for (const auto& [id, entry] : sessions_) {
+        if (entry.access == protocol::Access::control) total += entry.session->reservation();
+    }
+    return total;
+}
+
+std::optional<std::string> MeshService::refusal(std::uint64_t bytes, std::uint64_t released) const {
+    const auto mib = [](std::uint64_t b) { return std::to_string(b >> 20) + " MiB"; };
+    if (released == 0 && sessions_.size() / 2 >= config_.max_sessions) {
+        metrics_.sessions_refused[Metrics::kRefusedSessions].add();
+        return "the server holds its maximum of " + std::to_string(config_.max_sessions) +
+               " sessions; try again later";
+    }
+    const std::uint64_t all = reserved_bytes();
+    const std::uint64_t reserved = all - std::min(all, released);
+    if (reserved + bytes > max_memory_bytes_) {
+        metrics_.sessions_refused[Metrics::kRefusedMemory].add();
+        return "the server's memory is reserved by other sessions (" + mib(reserved) + " of " +
+               mib(max_memory_bytes_) + "; this budget needs " + mib(bytes) +
+               "): try again later or ask for fewer triangles";
+    }
+    const std::uint64_t resident = resident_bytes();
+    if (resident > max_memory_bytes_) {
+        metrics_.sessions_refused[Metrics::kRefusedMemory].add();
+        return "the server uses " + mib(resident) + ", more than its limit of " +
+               mib(max_memory_bytes_) + ": try again later";
+    }
+    return std::nullopt;
+}
+
+std::shared_ptr<MeshSession> MeshService::retire(
+    std::map<protocol::SessionId, Entry>::iterator control) {
+    auto session = control->second.session;
+    if (auto creator = control->second.creator.lock()) creator->release_created();
+    sessions_.erase(session->view_id());
+    sessions_.erase(control);
+    ++sessions_ended_;
+    return session;
 }
 
 std::shared_ptr<MeshSession> MeshService::remove(const protocol::SessionId& id) {
     std::lock_guard lock(sessions_mutex_);
     auto it = sessions_.find(id);
-    if (it == sessions_.end()) return nullptr;
-    auto session = std::move(it->second);
-    sessions_.erase(it);
-    return session;
+    if (it == sessions_.end() || it->second.access != protocol::Access::control) return nullptr;
+    return retire(it);
 }
 
 void MeshService::ended(const protocol::SessionId& id) {
@@ -461,61 +614,79 @@ void MeshService::moved(const std::vector<protocol::SessionId>& sessions) {
         auto session = remove(id);
         if (!session) continue;
         session->close(protocol::Closed::Reason::moved);
-        logger_.info("session_moved", {{"session", id.to_hex()}});
+        logger_.info("session_moved", {{"session", session->serial()}});
     }
 }
 
 std::size_t MeshService::session_count() const {
     std::lock_guard lock(sessions_mutex_);
-    return sessions_.size();
+    return sessions_.size() / 2;
 }
 
 void MeshService::expire(Clock::time_point now) {
     std::vector<std::shared_ptr<MeshSession>> expired;
     {
         std::lock_guard lock(sessions_mutex_);
-        for (auto it = sessions_.begin(); it != sessions_.end();) {
-            const auto orphaned = it->second->orphaned_since();
+        std::vector<std::map<protocol::SessionId, Entry>::iterator> due;
+        for (auto it = sessions_.begin(); it != sessions_.end(); ++it) {
+            if (it->second.access != protocol::Access::control) continue;
+            const auto& session = it->second.session;
+            const auto orphaned = session->orphaned_since();
             const bool orphan_expired =
                 orphaned && now - *orphaned >= to_duration(config_.orphan_timeout_s);
             const bool idle_expired =
-                now - it->second->last_request() >= to_duration(config_.idle_timeout_s);
-            if (orphan_expired || idle_expired) {
-                expired.push_back(std::move(it->second));
-                it = sessions_.erase(it);
-            } else {
-                ++it;
-            }
+                now - session->last_request() >= to_duration(config_.idle_timeout_s);
+            if (orphan_expired || idle_expired) due.push_back(it);
         }
+        for (auto it : due) expired.push_back(retire(it));
     }
     for (const auto& session : expired) {
         persistence_.remove(session->id());
         session->close(protocol::Closed::Reason::expired);
         metrics_.sessions_expired.add();
-        logger_.info("session_expired", {{"session", session->id().to_hex()}});
+        logger_.info("session_expired", {{"session", session->serial()}});
     }
 }
 
 void MeshService::shutdown() {
     if (shutting_down_.exchange(true)) return;
-    std::map<protocol::SessionId, std::shared_ptr<MeshSession>> sessions;
+    std::vector<std::shared_ptr<MeshSession>> sessions;
     {
         std::lock_guard lock(sessions_mutex_);
-        sessions.swap(sessions_);
+        for (const auto& [id, entry] : sessions_) {
+            if (entry.access == protocol::Access::control) sessions.push_back(entry.session);
+        }
+        sessions_.clear();
     }
     // With a store the sessions go on: their records stay, and subscribers are told to come back
     // (to this server once it has restarted, or to the one a load balancer picks).
     const auto reason = persistence_.enabled() ? protocol::Closed::Reason::moved
                                                : protocol::Closed::Reason::shutdown;
-    for (const auto& [id, session] : sessions) session->close(reason);
-    pool_.wait_idle(Clock::now() + to_duration(config_.drain_timeout_s));
+    for (const auto& session : sessions) session->close(reason);
     logger_.info("sessions_closed", {{"sessions", sessions.size()}});
+}
+
+bool MeshService::wait_workers(Clock::time_point deadline) {
+    return pool_.wait_idle(deadline);
+}
+
+void MeshService::observe_resources() {
+    std::uint64_t estimate = 0, reserved = 0;
+    for (const auto& session : live_sessions()) {
+        estimate += session->memory_estimate();
+        reserved += session->reservation();
+    }
+    metrics_.memory_estimate_bytes.set(static_cast<std::int64_t>(estimate));
+    metrics_.memory_reserved_bytes.set(static_cast<std::int64_t>(reserved));
+    metrics_.resident_bytes.set(static_cast<std::int64_t>(resident_bytes()));
 }
 
 std::vector<std::shared_ptr<MeshSession>> MeshService::live_sessions() const {
     std::lock_guard lock(sessions_mutex_);
     std::vector<std::shared_ptr<MeshSession>> live;
-    for (const auto& [id, session] : sessions_) live.push_back(session);
+    for (const auto& [id, entry] : sessions_) {
+        if (entry.access == protocol::Access::control) live.push_back(entry.session);
+    }
     return live;
 }
 
@@ -544,13 +715,17 @@ void MeshService::check_ownership() {
         // down): written again, under the registry's lock so that a close cannot slip between.
         std::lock_guard lock(sessions_mutex_);
         auto it = sessions_.find(id);
-        if (it != sessions_.end()) persistence_.save(id, it->second->latest());
+        if (it == sessions_.end()) continue;
+        const auto& session = it->second.session;
+        persistence_.save(session->id(), session->view_id(), session->latest());
     }
 }
 
 void MeshService::housekeeping() {
     constexpr auto kTick = std::chrono::milliseconds(100);
     std::uint64_t splits_before = metrics_.splits.value();
+    std::uint64_t ended_before = sessions_ended_;
+    bool trim_again = false;
     Clock::time_point second_start = Clock::now();
     Clock::time_point activity_start = second_start;
     Clock::time_point ownership_start = second_start;
@@ -576,7 +751,16 @@ void MeshService::housekeeping() {
                 static_cast<double>(splits - splits_before) / seconds_between(second_start, now)));
             splits_before = splits;
             second_start = now;
+            // Sessions ended: give their memory back to the system (once a second at most), and
+            // again a second later: a session's last turn and its connections' queued frames
+            // may free their memory after it left the registry.
+            if (sessions_ended_ != ended_before || trim_again) {
+                trim_again = sessions_ended_ != ended_before;
+                ended_before = sessions_ended_;
+                release_free_memory();
+            }
         }
+        observe_resources();
     }
 }
 

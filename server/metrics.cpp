@@ -96,6 +96,23 @@ std::string Metrics::render() const {
     gauge("worker_threads", "Refinement worker threads.", worker_threads);
     gauge("splits_per_second", "Splits over the last second, all sessions.", splits_per_second);
     gauge("store_up", "1 while the session store answers (or none is used), else 0.", store_up);
+    gauge("http_connections", "Open plain HTTP connections.", http_connections);
+    gauge("sessions_limit", "Live sessions allowed (--max-sessions).", sessions_limit);
+    gauge("sessions_per_connection_limit",
+          "Live sessions one connection may have created (--max-sessions-per-connection).",
+          sessions_per_connection_limit);
+    gauge("session_memory_limit_bytes", "Memory one session may hold (--session-memory-mb).",
+          session_memory_limit_bytes);
+    gauge("session_cpu_limit_seconds", "CPU time one session may use (--session-cpu-s).",
+          session_cpu_limit_seconds);
+    gauge("http_connections_limit", "Plain HTTP connections (--max-http-connections).",
+          http_connections_limit);
+    gauge("memory_limit_bytes", "Memory limit for admitting sessions (--max-memory-mb).",
+          memory_limit_bytes);
+    gauge("memory_reserved_bytes", "Memory the sessions' triangle budgets reserve.",
+          memory_reserved_bytes);
+    gauge("memory_estimate_bytes", "Memory the sessions hold, estimated.", memory_estimate_bytes);
+    gauge("resident_bytes", "Resident memory of the process.", resident_bytes);
     counter("sessions_created", "Sessions created.", sessions_created);
     counter("sessions_expired", "Sessions expired (idle or without subscribers).",
             sessions_expired);
@@ -111,6 +128,22 @@ std::string Metrics::render() const {
     counter("sessions_restored", "Sessions rebuilt from the session store.", sessions_restored);
     counter("store_errors", "Session store calls that failed (store down or unreachable).",
             store_errors);
+    counter("http_bad_requests", "Malformed HTTP requests and WebSocket handshakes (400).",
+            http_bad_requests);
+    counter("origins_refused", "WebSocket handshakes refused for their Origin (403).",
+            origins_refused);
+    counter("http_evicted", "HTTP connections closed to make room for new ones.", http_evicted);
+    counter("accept_errors", "Failed accepts (e.g. out of file descriptors).", accept_errors);
+    metric(out, "isomesh_session_cpu_seconds_total", "counter", "CPU time of session turns.",
+           static_cast<double>(session_cpu_us.value()) / 1e6);
+    header(out, "isomesh_sessions_refused_total", "counter",
+           "New sessions refused: per_connection (too_many_sessions), sessions and memory "
+           "(server_busy).");
+    const char* reasons[] = {"per_connection", "sessions", "memory"};
+    for (int i = 0; i < 3; ++i) {
+        out += "isomesh_sessions_refused_total{reason=\"" + std::string(reasons[i]) + "\"} " +
+               std::to_string(sessions_refused[i].value()) + "\n";
+    }
     header(out, "isomesh_errors_total", "counter", "Error replies by code.");
     for (int i = 0; i < protocol::kErrorCodeCount; ++i) {
         out += "isomesh_errors_total{code=\"" +

@@ -58,8 +58,18 @@ struct Metrics {
     Gauge run_queue;     ///< sessions waiting for a worker
     Gauge busy_workers;  ///< workers running a session slice
     Gauge worker_threads;
-    Gauge splits_per_second;  ///< over the last second, all sessions
-    Gauge store_up;           ///< 1 while the session store answers (or there is none)
+    Gauge splits_per_second;              ///< over the last second, all sessions
+    Gauge store_up;                       ///< 1 while the session store answers (or there is none)
+    Gauge http_connections;               ///< plain HTTP connections (not upgraded)
+    Gauge sessions_limit;                 ///< --max-sessions
+    Gauge sessions_per_connection_limit;  ///< --max-sessions-per-connection
+    Gauge session_memory_limit_bytes;     ///< --session-memory-mb
+    Gauge session_cpu_limit_seconds;      ///< --session-cpu-s
+    Gauge http_connections_limit;         ///< --max-http-connections
+    Gauge memory_limit_bytes;             ///< --max-memory-mb, resolved
+    Gauge memory_reserved_bytes;          ///< the sessions' reservations (triangle budgets)
+    Gauge memory_estimate_bytes;  ///< what the sessions hold, estimated (server/resources.h)
+    Gauge resident_bytes;         ///< the process's resident set
 
     // counters
     Counter sessions_created;
@@ -74,7 +84,15 @@ struct Metrics {
     Counter http_requests;
     Counter sessions_restored;  ///< rebuilt from the session store
     Counter store_errors;       ///< session store calls that failed
+    Counter http_bad_requests;  ///< malformed HTTP requests and WebSocket handshakes (400)
+    Counter origins_refused;    ///< WebSocket handshakes from an Origin not allowed (403)
+    Counter http_evicted;       ///< HTTP connections closed to make room (limit, EMFILE)
+    Counter accept_errors;      ///< failed accept() calls (e.g. out of file descriptors)
+    Counter session_cpu_us;     ///< CPU time of session turns, microseconds
     std::array<Counter, protocol::kErrorCodeCount> errors;
+    /// New sessions refused, by reason (sessions_refused_total{reason=...}).
+    static constexpr int kRefusedPerConnection = 0, kRefusedSessions = 1, kRefusedMemory = 2;
+    std::array<Counter, 3> sessions_refused;
 
     // histograms, seconds
     Histogram first_mesh_seconds;     ///< from a version's request to its keyframe being queued

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "protocol/frame.h"
+
 namespace isomesh::server {
 
 OutputQueue::OutputQueue(std::size_t budget_bytes, std::function<void()> wakeup, Metrics* metrics)
@@ -15,7 +17,7 @@ void OutputQueue::expect_keyframe(const protocol::SessionId& session) {
     Lock lock(mutex_);
     if (closed_) return;
     drop_frames(lock, session, true);
-    streams_[session] = StreamState::awaiting;
+    streams_[session] = Stream{};
 }
 
 void OutputQueue::forget(const protocol::SessionId& session, bool drop_queued) {
@@ -30,7 +32,8 @@ bool OutputQueue::push_keyframe(const protocol::SessionId& session,
     auto stream = streams_.find(session);
     if (closed_ || stream == streams_.end()) return false;
     drop_frames(lock, session, true);
-    stream->second = StreamState::live;
+    stream->second.state = StreamState::live;
+    stream->second.sequence = protocol::frame_sequence(*frame);
     enqueue(lock, {Outgoing::Kind::keyframe, nullptr, std::move(frame), session, created});
     const bool wake = claim_writer(lock);
     lock.unlock();
@@ -45,10 +48,10 @@ OutputQueue::DeltaOutcome OutputQueue::push_delta(const protocol::SessionId& ses
     Lock lock(mutex_);
     auto stream = streams_.find(session);
     if (closed_ || stream == streams_.end()) return DeltaOutcome::dropped_unknown;
-    if (stream->second != StreamState::live) {
+    if (stream->second.state != StreamState::live) {
         if (metrics_) metrics_->deltas_dropped.add();
-        return stream->second == StreamState::awaiting ? DeltaOutcome::dropped_awaiting
-                                                       : DeltaOutcome::dropped_stalled;
+        return stream->second.state == StreamState::awaiting ? DeltaOutcome::dropped_awaiting
+                                                             : DeltaOutcome::dropped_stalled;
     }
     // An empty queue always takes one frame, however large: otherwise no write would ever
     // complete to bring the stream back.
@@ -57,13 +60,15 @@ OutputQueue::DeltaOutcome OutputQueue::push_delta(const protocol::SessionId& ses
         // write will report the stall).
         drop_frames(lock, session, false);
         if (metrics_) metrics_->deltas_dropped.add();
+        stream->second.sequence.reset();
         if (queue_.empty() && in_flight_bytes_ == 0) {
-            stream->second = StreamState::awaiting;
+            stream->second.state = StreamState::awaiting;
             return DeltaOutcome::dropped_resync;
         }
-        stream->second = StreamState::stalled;
+        stream->second.state = StreamState::stalled;
         return DeltaOutcome::dropped_stalled;
     }
+    stream->second.sequence = protocol::frame_sequence(*frame);
     enqueue(lock, {Outgoing::Kind::delta, nullptr, std::move(frame), session, created});
     const bool wake = claim_writer(lock);
     lock.unlock();
@@ -81,6 +86,25 @@ void OutputQueue::push_text(std::shared_ptr<const std::string> text, bool droppa
     const bool wake = claim_writer(lock) || overflowed_;
     lock.unlock();
     notify(wake);
+}
+
+bool OutputQueue::push_session_text(const protocol::SessionId& session,
+                                    std::shared_ptr<const std::string> text,
+                                    std::optional<std::uint64_t> sequence, bool droppable) {
+    Lock lock(mutex_);
+    auto stream = streams_.find(session);
+    if (closed_ || stream == streams_.end()) return false;
+    if (sequence) {
+        const Stream& s = stream->second;
+        if (s.state != StreamState::live || !s.sequence || *s.sequence < *sequence) return false;
+    }
+    if (droppable && queued_bytes_ > 0 && queued_bytes_ + text->size() > budget_) return false;
+    enqueue(lock, {Outgoing::Kind::text, std::move(text), nullptr, {}, Clock::now()});
+    if (text_bytes_ > budget_) overflowed_ = true;
+    const bool wake = claim_writer(lock) || overflowed_;
+    lock.unlock();
+    notify(wake);
+    return true;
 }
 
 void OutputQueue::close() {
@@ -104,6 +128,7 @@ std::optional<Outgoing> OutputQueue::next() {
     Outgoing message = std::move(queue_.front());
     queue_.pop_front();
     if (!message.binary()) text_bytes_ -= message.size();
+    if (message.binary()) uncount(lock, message.session, message.size());
     in_flight_bytes_ = message.size();
     return message;
 }
@@ -115,9 +140,9 @@ std::vector<protocol::SessionId> OutputQueue::written() {
     in_flight_bytes_ = 0;
     std::vector<protocol::SessionId> resume;
     if (queued_bytes_ <= budget_ / 4) {
-        for (auto& [session, state] : streams_) {
-            if (state != StreamState::stalled) continue;
-            state = StreamState::awaiting;
+        for (auto& [session, stream] : streams_) {
+            if (stream.state != StreamState::stalled) continue;
+            stream.state = StreamState::awaiting;
             resume.push_back(session);
         }
     }
@@ -139,7 +164,13 @@ std::optional<OutputQueue::StreamState> OutputQueue::stream_state(
     Lock lock(mutex_);
     auto it = streams_.find(session);
     if (it == streams_.end()) return std::nullopt;
-    return it->second;
+    return it->second.state;
+}
+
+std::size_t OutputQueue::session_bytes(const protocol::SessionId& session) const {
+    Lock lock(mutex_);
+    auto it = streams_.find(session);
+    return it == streams_.end() ? 0 : it->second.queued_bytes;
 }
 
 bool OutputQueue::overflowed() const {
@@ -156,11 +187,14 @@ bool OutputQueue::claim_writer(const Lock&) {
 void OutputQueue::enqueue(const Lock&, Outgoing message) {
     queued_bytes_ += message.size();
     if (!message.binary()) text_bytes_ += message.size();
+    if (auto stream = streams_.find(message.session); message.binary() && stream != streams_.end())
+        stream->second.queued_bytes += message.size();
     if (metrics_) metrics_->queued_bytes.add(static_cast<std::int64_t>(message.size()));
     queue_.push_back(std::move(message));
 }
 
-void OutputQueue::drop_frames(const Lock&, const protocol::SessionId& session, bool keyframes_too) {
+void OutputQueue::drop_frames(const Lock& lock, const protocol::SessionId& session,
+                              bool keyframes_too) {
     auto dropped = std::stable_partition(queue_.begin(), queue_.end(), [&](const Outgoing& m) {
         const bool droppable = m.kind == Outgoing::Kind::delta ||
                                (keyframes_too && m.kind == Outgoing::Kind::keyframe);
@@ -172,8 +206,16 @@ void OutputQueue::drop_frames(const Lock&, const protocol::SessionId& session, b
         if (metrics_ && it->kind == Outgoing::Kind::delta) metrics_->deltas_dropped.add();
     }
     queue_.erase(dropped, queue_.end());
+    uncount(lock, session, bytes);
     queued_bytes_ -= bytes;
     if (metrics_) metrics_->queued_bytes.add(-static_cast<std::int64_t>(bytes));
+}
+
+void OutputQueue::uncount(const Lock&, const protocol::SessionId& session, std::size_t bytes) {
+    auto stream = streams_.find(session);
+    if (stream == streams_.end()) return;
+    // Frames queued before a forget() and a new subscription were never counted by this stream.
+    stream->second.queued_bytes -= std::min(stream->second.queued_bytes, bytes);
 }
 
 void OutputQueue::notify(bool wake) {

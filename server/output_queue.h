@@ -12,7 +12,11 @@
 //              it comes, which makes the stream live again.
 // So a slow reader never makes the server buffer more than the budget plus one keyframe per
 // session, and never gets a broken stream: a gap in sequence numbers is always followed by a
-// keyframe. Text replies are never dropped (their number is bounded by the client's own
+// keyframe. A session's own messages (push_session_text) go only to a connection that follows
+// it, and one naming a sequence number (`progress`, `converged`) only once this connection's
+// stream has reached that frame: a message never names a frame its connection has not received
+// first (a lagging connection gets `converged` again after its catch-up keyframe). Text replies
+// are never dropped (their number is bounded by the client's own
 // requests), except `progress`, which is informational; a client that lets unsent text messages
 // pile up beyond the budget (it sends requests but does not read the replies) is marked
 // overflowed and should be disconnected.
@@ -81,6 +85,12 @@ class OutputQueue {
                             Clock::time_point created = Clock::now());
     /// Queues a text message; a `droppable` one is dropped when over budget.
     void push_text(std::shared_ptr<const std::string> text, bool droppable = false);
+    /// Queues a message about a followed session; dropped when the session is not followed, or
+    /// when `sequence` is given and the stream is not live at or past that frame. False when
+    /// dropped.
+    bool push_session_text(const protocol::SessionId& session,
+                           std::shared_ptr<const std::string> text,
+                           std::optional<std::uint64_t> sequence, bool droppable = false);
     /// Refuses everything from now on and drops what is queued (the connection is gone).
     void close();
 
@@ -96,6 +106,8 @@ class OutputQueue {
     std::size_t queued_bytes() const;
     std::size_t queued_messages() const;
     std::optional<StreamState> stream_state(const protocol::SessionId& session) const;
+    /// Bytes of the session's frames queued and not yet being written.
+    std::size_t session_bytes(const protocol::SessionId& session) const;
     bool overflowed() const;
     std::size_t budget() const { return budget_; }
 
@@ -107,6 +119,8 @@ class OutputQueue {
     /// Removes queued (not in-flight) deltas of `session`, and its keyframes if `keyframes_too`;
     /// counts dropped deltas.
     void drop_frames(const Lock&, const protocol::SessionId& session, bool keyframes_too);
+    /// Takes `bytes` of the session's frames off its stream's count.
+    void uncount(const Lock&, const protocol::SessionId& session, std::size_t bytes);
     void notify(bool wake);
 
     const std::size_t budget_;
@@ -117,7 +131,12 @@ class OutputQueue {
     std::size_t queued_bytes_ = 0;  // including the message in flight
     std::size_t in_flight_bytes_ = 0;
     std::size_t text_bytes_ = 0;  // text messages queued, not in flight
-    std::map<protocol::SessionId, StreamState> streams_;
+    struct Stream {
+        StreamState state = StreamState::awaiting;
+        std::optional<std::uint64_t> sequence;  // of the last frame queued, while live
+        std::size_t queued_bytes = 0;           // frames queued, not in flight
+    };
+    std::map<protocol::SessionId, Stream> streams_;
     bool writer_busy_ = false;
     bool closed_ = false;
     bool overflowed_ = false;

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "polygonize/polygonizer.h"
+#include "server/resources.h"
 
 namespace isomesh::server {
 namespace {
@@ -32,9 +32,11 @@ std::string timeout_message(Clock::duration limit) {
 
 }  // namespace
 
-MeshSession::MeshSession(protocol::SessionId id, FunctionVersion first, SessionServices services,
+MeshSession::MeshSession(SessionIds ids, FunctionVersion first, SessionServices services,
                          EndHandler on_end)
-    : id_(id),
+    : id_(ids.control),
+      view_id_(ids.view),
+      serial_(ids.serial),
       services_(services),
       on_end_(std::move(on_end)),
       latest_(first),
@@ -52,50 +54,63 @@ MeshSession::~MeshSession() {
 
 // ---- requests ---------------------------------------------------------------------------------
 
-bool MeshSession::subscribe(const std::shared_ptr<Client>& client,
+bool MeshSession::subscribe(const std::shared_ptr<Client>& client, protocol::Access access,
                             const std::function<void()>& reply) {
     {
         std::lock_guard lock(mutex_);
-        if (finished_ || closing_) return false;
+        if (finished_) return false;
         if (reply) reply();
-        const bool known = std::any_of(subscribers_.begin(), subscribers_.end(),
-                                       [&](const auto& s) { return s.lock() == client; });
+        const bool known = std::any_of(
+            subscribers_.begin(), subscribers_.end(),
+            [&](const Subscriber& s) { return s.access == access && s.client.lock() == client; });
         if (!known) {
-            subscribers_.push_back(client);
+            subscribers_.push_back({client, access});
             services_.metrics.subscriptions.add(1);
         }
         orphaned_since_.reset();
-        keyframe_requests_.push_back({client, false});
+        keyframe_requests_.push_back({client, false, access});
     }
     schedule();
     return true;
 }
 
-void MeshSession::unsubscribe(const Client& client) {
+void MeshSession::unsubscribe(const Client& client, protocol::Access access) {
     std::lock_guard lock(mutex_);
-    auto gone = std::remove_if(subscribers_.begin(), subscribers_.end(), [&](const auto& s) {
-        auto subscriber = s.lock();
-        return !subscriber || subscriber.get() == &client;
+    auto gone = std::remove_if(subscribers_.begin(), subscribers_.end(), [&](const Subscriber& s) {
+        auto subscriber = s.client.lock();
+        return !subscriber || (subscriber.get() == &client && s.access == access);
     });
     services_.metrics.subscriptions.add(-static_cast<std::int64_t>(subscribers_.end() - gone));
     subscribers_.erase(gone, subscribers_.end());
     if (subscribers_.empty() && !orphaned_since_) orphaned_since_ = Clock::now();
 }
 
-void MeshSession::request_keyframe(const std::shared_ptr<Client>& client, bool catch_up) {
+void MeshSession::request_keyframe(const std::shared_ptr<Client>& client, protocol::Access access,
+                                   bool catch_up) {
     {
         std::lock_guard lock(mutex_);
         if (finished_) return;
-        keyframe_requests_.push_back({client, catch_up});
+        keyframe_requests_.push_back({client, catch_up, access});
     }
     schedule();
 }
 
 void MeshSession::update(const protocol::Update& request, const VersionLimits& limits,
+                         const Client& requester,
                          const std::function<bool(const VersionResult&)>& reply) {
     std::lock_guard serial(update_mutex_);
-    VersionResult next = next_version(latest(), request, limits);
+    const FunctionVersion current = latest();
+    VersionResult next = next_version(current, request, limits);
+    if (next && changes_nothing(current, next.value())) {
+        reply(current);  // nothing to store or apply: the reply names the latest version
+        return;
+    }
     if (!reply(next) || !next) return;
+    std::vector<LiveSubscriber> others = live_subscribers();
+    std::erase_if(others, [&](const LiveSubscriber& s) {
+        return s.client.get() == &requester && s.access == protocol::Access::control;
+    });
+    broadcast(others, protocol::Updated{std::nullopt, id_, next.value().state}, std::nullopt);
     {
         std::lock_guard lock(mutex_);
         latest_ = next.value();
@@ -114,13 +129,13 @@ void MeshSession::set_paused(bool paused) {
 }
 
 void MeshSession::close(protocol::Closed::Reason reason) {
-    {
-        std::lock_guard lock(mutex_);
-        if (finished_ || closing_) return;
-        closing_ = reason;
-        cancel_ = true;
-    }
-    schedule();
+    cancel_ = true;
+    end_subscriptions(reason);
+}
+
+std::uint64_t MeshSession::reservation() const {
+    std::lock_guard lock(mutex_);
+    return SessionMemory::projected(*latest_.state.constraints.triangles);
 }
 
 FunctionVersion MeshSession::latest() const {
@@ -130,8 +145,7 @@ FunctionVersion MeshSession::latest() const {
 
 std::size_t MeshSession::subscriber_count() const {
     std::lock_guard lock(mutex_);
-    return static_cast<std::size_t>(std::count_if(subscribers_.begin(), subscribers_.end(),
-                                                  [](const auto& s) { return !s.expired(); }));
+    return live_subscribers_locked().size();
 }
 
 void MeshSession::touch() {
@@ -159,7 +173,6 @@ MeshSession::Inbox MeshSession::take_inbox() {
     std::lock_guard lock(mutex_);
     Inbox inbox;
     inbox.finished = finished_;
-    inbox.closing = closing_;
     inbox.paused = paused_;
     if (!paused_ && pending_version_) {
         inbox.version = std::move(*pending_version_);
@@ -169,30 +182,90 @@ MeshSession::Inbox MeshSession::take_inbox() {
     }
     inbox.keyframes = std::move(keyframe_requests_);
     keyframe_requests_.clear();
-    for (const auto& weak : subscribers_) {
-        if (auto client = weak.lock()) inbox.subscribers.push_back(std::move(client));
-    }
+    inbox.subscribers = live_subscribers_locked();
     return inbox;
 }
 
 bool MeshSession::run_slice() {
+    const Clock::duration cpu_start = thread_cpu_time();
+    bool more = false;
+    {
+        // The session's CPU budget also bounds a single turn, e.g. a phase 1 that runs long.
+        const auto left = services_.settings.session_cpu - cpu_time();
+        auto guard =
+            services_.watchdog.arm(std::max(left, Clock::duration::zero()), cancel_, cpu_spent_);
+        more = turn();
+    }
+    return within_budgets(thread_cpu_time() - cpu_start) && more;
+}
+
+bool MeshSession::within_budgets(Clock::duration turn_cpu) {
+    cpu_time_ += turn_cpu.count();
+    services_.metrics.session_cpu_us.add(static_cast<std::uint64_t>(
+        std::chrono::duration_cast<std::chrono::microseconds>(turn_cpu).count()));
+    std::uint64_t queued = 0;
+    const std::vector<LiveSubscriber> subscribers = live_subscribers();
+    for (const LiveSubscriber& s : subscribers)
+        queued += s.client->queue().session_bytes(id_for(s.access));
+    memory_estimate_ = SessionMemory::estimate(wire_.triangle_count(), queued);
+    {
+        std::lock_guard lock(mutex_);
+        if (finished_) return false;
+    }
+    const auto mib = [](std::uint64_t bytes) { return std::to_string(bytes >> 20) + " MiB"; };
+    if (memory_estimate_ > services_.settings.session_memory_bytes) {
+        fail(ErrorCode::resource_limit,
+             "the session holds about " + mib(memory_estimate_) + ", more than its budget of " +
+                 mib(services_.settings.session_memory_bytes),
+             current_.request_id);
+        return false;
+    }
+    if (cpu_spent_ || cpu_time() >= services_.settings.session_cpu) {
+        const auto seconds = [](Clock::duration d) {
+            return std::to_string(std::chrono::duration_cast<std::chrono::seconds>(d).count());
+        };
+        fail(ErrorCode::resource_limit,
+             "the session used its CPU-time budget of " + seconds(services_.settings.session_cpu) +
+                 " s",
+             current_.request_id);
+        return false;
+    }
+    return true;
+}
+
+void MeshSession::requeue_keyframes(std::vector<KeyframeRequest> requests) {
+    std::lock_guard lock(mutex_);
+    keyframe_requests_.insert(keyframe_requests_.begin(), requests.begin(), requests.end());
+}
+
+bool MeshSession::mid_change() const {
+    return pipeline_ && pipeline_->field_change_pending();
+}
+
+Watchdog::Guard MeshSession::arm_eval_limit() {
+    return services_.watchdog.arm(services_.settings.eval_timeout, cancel_, timed_out_);
+}
+
+bool MeshSession::turn() {
     const Clock::time_point start = Clock::now();
     Inbox inbox = take_inbox();
     if (inbox.finished) return false;
-    if (inbox.closing) {
-        finish(*inbox.closing);
-        return false;
-    }
     try {
         if (inbox.version) {
+            last_frame_converged_ = false;  // a new version's frames start unflagged
             const Start started = start_version(std::move(*inbox.version), inbox);
             if (started == Start::failed) return false;
-            if (started == Start::superseded) return true;
+            if (started == Start::superseded) {
+                // Keyframes asked for are served by a later turn (a lost request would leave a
+                // subscriber waiting for a keyframe forever).
+                requeue_keyframes(std::move(inbox.keyframes));
+                return true;
+            }
         }
         if (!pipeline_) return false;
         serve_keyframes(inbox.keyframes);
         if (inbox.paused || inbox.subscribers.empty() || converged_) {
-            flush(inbox, converged_);
+            if (!mid_change()) flush(inbox, converged_);
             return false;
         }
         const bool more = refine_turn(inbox);
@@ -209,7 +282,9 @@ void MeshSession::observe_slice(Clock::time_point start) {
 }
 
 MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& inbox) {
-    flush(inbox, false);  // the old version's last changes, under its own version number
+    // The old version's last changes, under its own version number; those of a version still
+    // half applied (vertices partly moved) wait for the new version's first frame instead.
+    if (!mid_change()) flush(inbox, false);
     const bool restart_needed = !pipeline_ || version.state.box != current_.state.box ||
                                 version.error_measure->name() != current_.error_measure->name();
     if (restart_needed) {
@@ -247,8 +322,7 @@ MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) 
     PipelineStep first;
     {
         // The step stops at its budget; the watchdog only catches a runaway evaluation.
-        auto guard = services_.watchdog.arm(Clock::now() + services_.settings.eval_timeout, cancel_,
-                                            timed_out_);
+        auto guard = arm_eval_limit();
         first = pipeline->step(WorkBudget(budget_us, WorkBudget::thread_cpu_clock(), &cancel_));
     }
     if (!pipeline->started()) {
@@ -266,7 +340,7 @@ MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) 
     const Clock::time_point now = Clock::now();
     first_mesh_ms_ = milliseconds_between(version.requested, now);
     services_.metrics.first_mesh_seconds.observe(seconds_between(version.requested, now));
-    services_.logger.debug("first_mesh", {{"session", id_.to_hex()},
+    services_.logger.debug("first_mesh", {{"session", serial_},
                                           {"version", version.state.version},
                                           {"triangles", wire_.triangle_count()},
                                           {"latency_ms", first_mesh_ms_},
@@ -282,7 +356,9 @@ void MeshSession::replace_mesh(Inbox& inbox, std::uint32_t version, bool converg
     ++sequence_;
     const Clock::time_point now = Clock::now();
     auto frame = encode_keyframe(converged ? protocol::frame_flags::converged : 0, version);
-    for (const auto& client : inbox.subscribers) client->queue().push_keyframe(id_, frame, now);
+    push_keyframes(inbox.subscribers, frame, now);
+    wire_version_ = version;
+    last_frame_converged_ = converged;
     inbox.keyframes.clear();  // every subscriber just got this one
     last_flush_ = now;
 }
@@ -305,8 +381,7 @@ bool MeshSession::refine_turn(Inbox& inbox) {
     PipelineStep step;
     {
         // The step stops at its budget; the watchdog only catches a runaway evaluation.
-        auto guard = services_.watchdog.arm(Clock::now() + services_.settings.eval_timeout, cancel_,
-                                            timed_out_);
+        auto guard = arm_eval_limit();
         step = pipeline_->step(budget);
     }
     if (timed_out_) {
@@ -348,30 +423,58 @@ bool MeshSession::refine_turn(Inbox& inbox) {
     return !converged_;
 }
 
+const std::shared_ptr<const Bytes>& MeshSession::frame_for(protocol::Access access,
+                                                           FrameCopies& frame) const {
+    if (access == protocol::Access::control) return frame.control;
+    if (!frame.view)
+        frame.view =
+            std::make_shared<const Bytes>(protocol::with_session(*frame.control, view_id_));
+    return frame.view;
+}
+
+void MeshSession::push_keyframes(const std::vector<LiveSubscriber>& to,
+                                 const std::shared_ptr<const Bytes>& frame,
+                                 Clock::time_point created) {
+    FrameCopies copies{frame, nullptr};
+    for (const LiveSubscriber& s : to)
+        s.client->queue().push_keyframe(id_for(s.access), frame_for(s.access, copies), created);
+}
+
 void MeshSession::serve_keyframes(const std::vector<KeyframeRequest>& requests) {
-    std::shared_ptr<const Bytes> frames[2];  // without and with the catch_up flag
-    const std::uint16_t converged = converged_ ? protocol::frame_flags::converged : 0;
+    FrameCopies frames[2];  // without and with the catch_up flag
+    const std::uint16_t converged = converged_ && wire_version_ == current_.state.version
+                                        ? protocol::frame_flags::converged
+                                        : 0;
     for (const KeyframeRequest& request : requests) {
         auto client = request.client.lock();
         if (!client) continue;
         auto& frame = frames[request.catch_up ? 1 : 0];
-        if (!frame) {
+        if (!frame.control) {
             const std::uint16_t flags =
                 converged | (request.catch_up ? protocol::frame_flags::catch_up : 0);
-            frame = encode_keyframe(flags, current_.state.version);
+            // The mirror's content: during a change of function, the version whose frames went
+            // out last (the new version's first delta then moves the vertices).
+            frame.control = encode_keyframe(flags, wire_version_);
         }
-        if (client->queue().push_keyframe(id_, frame) && converged_message_)
-            client->send(*converged_message_);
+        const protocol::SessionId& id = id_for(request.access);
+        if (client->queue().push_keyframe(id, frame_for(request.access, frame)) &&
+            converged_message_)
+            broadcast({{client, request.access}}, *converged_message_,
+                      converged_message_->sequence);
     }
 }
 
 void MeshSession::flush(const Inbox& inbox, bool converged) {
     last_flush_ = Clock::now();
-    if (pending_changes_ == 0) return;
+    // A convergence found after the last frame went out is announced by an empty delta flagged
+    // converged, so that the frame a `converged` message names always carries the flag.
+    const bool announce = converged && !last_frame_converged_;
+    if (pending_changes_ == 0 && !announce) return;
     pending_changes_ = 0;
     const WireDelta content = wire_.apply(pending_.take());
-    if (content.empty()) return;
+    if (content.empty() && !announce) return;
     ++sequence_;
+    last_frame_converged_ = converged;
     protocol::FrameInfo info;
     info.kind = protocol::FrameKind::delta;
     info.flags = converged ? protocol::frame_flags::converged : 0;
@@ -379,6 +482,7 @@ void MeshSession::flush(const Inbox& inbox, bool converged) {
     info.sequence = sequence_;
     info.timestamp_us = unix_time_us();
     info.function_version = current_.state.version;
+    wire_version_ = current_.state.version;
     protocol::DeltaContent frame_content;
     frame_content.removed = content.removed;
     frame_content.vertices = content.vertices;
@@ -388,11 +492,11 @@ void MeshSession::flush(const Inbox& inbox, bool converged) {
     services_.metrics.encode_seconds.observe(seconds_between(last_flush_, Clock::now()));
     if (!encoded) throw std::runtime_error("delta encoding failed: " + encoded.error().message);
     wire_.commit_wire_ids(content.refiner_ids, encoded.value().triangle_ids);
-    auto frame = std::make_shared<const Bytes>(std::move(encoded.value().bytes));
-    for (const auto& client : inbox.subscribers) {
-        if (client->queue().push_delta(id_, frame, last_flush_) ==
-            OutputQueue::DeltaOutcome::dropped_resync)
-            request_keyframe(client, true);
+    FrameCopies frame{std::make_shared<const Bytes>(std::move(encoded.value().bytes)), nullptr};
+    for (const LiveSubscriber& s : inbox.subscribers) {
+        if (s.client->queue().push_delta(id_for(s.access), frame_for(s.access, frame),
+                                         last_flush_) == OutputQueue::DeltaOutcome::dropped_resync)
+            request_keyframe(s.client, s.access, true);
     }
 }
 
@@ -436,7 +540,7 @@ void MeshSession::send_progress(const Inbox& inbox) {
     auto progress = statistics<protocol::Progress>();
     progress.splits_per_second = splits_since_progress_ / seconds_between(last_progress_, now);
     progress.resolving = pipeline_->status().resolving;
-    broadcast(inbox.subscribers, progress, true);
+    broadcast(inbox.subscribers, progress, progress.sequence, true);
     last_progress_ = now;
     splits_since_progress_ = 0;
 }
@@ -453,61 +557,89 @@ void MeshSession::send_converged(const Inbox& inbox) {
     message.merges = counters.merges - counters_at_version_.merges;
     message.first_mesh_ms = first_mesh_ms_;
     message.total_ms = milliseconds_between(current_.requested, Clock::now());
-    broadcast(inbox.subscribers, message);
+    broadcast(inbox.subscribers, message, message.sequence);
     converged_message_ = message;
-    services_.logger.debug("converged", {{"session", id_.to_hex()},
+    services_.logger.debug("converged", {{"session", serial_},
                                          {"version", message.version},
                                          {"triangles", message.triangles},
                                          {"total_ms", message.total_ms}});
 }
 
-void MeshSession::broadcast(const std::vector<std::shared_ptr<Client>>& to,
-                            const protocol::ServerMessage& message, bool droppable) {
-    if (to.empty()) return;
-    auto text = std::make_shared<const std::string>(protocol::serialize(message));
-    for (const auto& client : to) client->queue().push_text(text, droppable);
+template <class Message>
+void MeshSession::broadcast(const std::vector<LiveSubscriber>& to, Message message,
+                            std::optional<std::uint64_t> sequence, bool droppable) {
+    std::shared_ptr<const std::string> texts[2];  // naming the control id, the view id
+    for (const LiveSubscriber& s : to) {
+        auto& text = texts[s.access == protocol::Access::view ? 1 : 0];
+        if (!text) {
+            message.session = id_for(s.access);
+            if constexpr (requires { message.access; }) {  // created, updated, subscribed
+                message.access = s.access;
+                message.view = s.access == protocol::Access::control
+                                   ? std::optional<protocol::SessionId>(view_id_)
+                                   : std::nullopt;
+            }
+            text = std::make_shared<const std::string>(
+                protocol::serialize(protocol::ServerMessage(message)));
+        }
+        s.client->queue().push_session_text(id_for(s.access), text, sequence, droppable);
+    }
 }
 
 void MeshSession::fail(ErrorCode code, const std::string& message,
                        const std::optional<protocol::RequestId>& request_id) {
     services_.logger.warn(
         "session_failed",
-        {{"session", id_.to_hex()}, {"code", protocol::to_string(code)}, {"message", message}});
+        {{"session", serial_}, {"code", protocol::to_string(code)}, {"message", message}});
     services_.metrics.errors[static_cast<int>(code)].add();
     protocol::ErrorReply error;
     error.id = request_id;
     error.session = id_;
     error.code = code;
     error.message = message;
-    broadcast(live_subscribers(), error);
-    finish(protocol::Closed::Reason::error);
+    broadcast(live_subscribers(), error, std::nullopt);
+    // Out of the registry (and the store) before `closed` leaves: a request made on reading it
+    // finds the session gone.
     if (on_end_) on_end_(id_);
+    finish(protocol::Closed::Reason::error);
 }
 
 void MeshSession::finish(protocol::Closed::Reason reason) {
-    std::vector<std::shared_ptr<Client>> subscribers = live_subscribers();
+    end_subscriptions(reason);
+    pipeline_.reset();
+    wire_ = WireMesh();
+}
+
+bool MeshSession::end_subscriptions(protocol::Closed::Reason reason) {
+    std::vector<LiveSubscriber> subscribers;
     {
         std::lock_guard lock(mutex_);
+        if (finished_) return false;
         finished_ = true;
+        subscribers = live_subscribers_locked();
         services_.metrics.subscriptions.add(-static_cast<std::int64_t>(subscribers_.size()));
         subscribers_.clear();
         keyframe_requests_.clear();
         pending_version_.reset();
     }
-    for (const auto& client : subscribers) {
-        client->remove_subscription(id_);
-        client->queue().forget(id_, false);  // frames already queued still go out
-        client->send(protocol::Closed{id_, reason});
+    for (const LiveSubscriber& s : subscribers) {
+        const protocol::SessionId& id = id_for(s.access);
+        s.client->remove_subscription(id);
+        s.client->queue().forget(id, false);  // frames already queued still go out
+        s.client->send(protocol::Closed{id, reason});
     }
-    pipeline_.reset();
-    wire_ = WireMesh();
+    return true;
 }
 
-std::vector<std::shared_ptr<Client>> MeshSession::live_subscribers() {
+std::vector<MeshSession::LiveSubscriber> MeshSession::live_subscribers() {
     std::lock_guard lock(mutex_);
-    std::vector<std::shared_ptr<Client>> out;
-    for (const auto& weak : subscribers_) {
-        if (auto client = weak.lock()) out.push_back(std::move(client));
+    return live_subscribers_locked();
+}
+
+std::vector<MeshSession::LiveSubscriber> MeshSession::live_subscribers_locked() const {
+    std::vector<LiveSubscriber> out;
+    for (const Subscriber& s : subscribers_) {
+        if (auto client = s.client.lock()) out.push_back({std::move(client), s.access});
     }
     return out;
 }

@@ -17,6 +17,16 @@
 //      the topology) is sent as a keyframe instead.
 // A new version raises the cancel flag, so stale work stops within one operation. Every subscriber
 // receives the same frames (encoded once), so all end with identical meshes.
+//
+// A session has two ids: the control id (`created` returns it; every request) and the view id
+// (read-only: subscribe, unsubscribe, resync). Each subscriber holds one of them and receives
+// frames and messages naming the id it holds (a frame's copy for view holders differs only in
+// its header's session id), so a view holder never learns the control id.
+//
+// Budgets, enforced at the edges of every turn: the CPU time of the session's turns (the worker
+// thread's CPU clock) over the session's life, and its memory estimated from what it holds
+// (server/resources.h); a session over either ends with `resource_limit`. A single step running
+// longer than the evaluation limit in CPU time fails the session too (eval_timeout).
 #pragma once
 
 #include <atomic>
@@ -50,6 +60,8 @@ struct SessionSettings {
     Clock::duration eval_timeout = std::chrono::seconds(10);
     /// CPU time of a session's first step: the first mesh leaves within it, whatever the function.
     Clock::duration first_mesh_budget = std::chrono::milliseconds(10);
+    Clock::duration session_cpu = std::chrono::hours(1);  ///< CPU time over the session's life
+    std::uint64_t session_memory_bytes = std::uint64_t{1280} << 20;
     Clock::duration progress_interval = std::chrono::milliseconds(250);
     int position_bits = 14;
     /// Draco's encoder speed, 0 (smallest frames) to 10 (fastest); clients do not depend on it.
@@ -65,35 +77,62 @@ struct SessionServices {
     SessionSettings settings;
 };
 
+/// A session's ids, and its serial number (the order of creation: what logs name, since the ids
+/// are capabilities).
+struct SessionIds {
+    protocol::SessionId control;
+    protocol::SessionId view;
+    std::uint64_t serial = 0;
+};
+
 class MeshSession final : public Task, public std::enable_shared_from_this<MeshSession> {
   public:
-    /// Called (from a worker) when the session ends by itself: evaluation timeout or failure.
+    /// Called (from a worker) when the session ends by itself: evaluation timeout, a budget or a
+    /// failure.
     using EndHandler = std::function<void(const protocol::SessionId&)>;
 
-    MeshSession(protocol::SessionId id, FunctionVersion first, SessionServices services,
-                EndHandler on_end);
+    MeshSession(SessionIds ids, FunctionVersion first, SessionServices services, EndHandler on_end);
     ~MeshSession() override;
 
     const protocol::SessionId& id() const { return id_; }
+    const protocol::SessionId& view_id() const { return view_id_; }
+    std::uint64_t serial() const { return serial_; }
+    /// The id holders of `access` know the session by.
+    const protocol::SessionId& id_for(protocol::Access access) const {
+        return access == protocol::Access::view ? view_id_ : id_;
+    }
 
     // ---- requests: any thread ----
-    /// Adds a subscriber, whose queue must already expect this session's keyframe
-    /// (OutputQueue::expect_keyframe); `reply` runs first (under the session's lock, so that the
-    /// keyframe cannot overtake it), then the keyframe follows. False when the session has ended.
-    bool subscribe(const std::shared_ptr<Client>& client, const std::function<void()>& reply);
-    void unsubscribe(const Client& client);
+    /// Adds a subscriber holding the id of `access`, whose queue must already expect that id's
+    /// keyframe (OutputQueue::expect_keyframe); `reply` runs first (under the session's lock, so
+    /// that the keyframe cannot overtake it), then the keyframe follows. False when the session
+    /// has ended.
+    bool subscribe(const std::shared_ptr<Client>& client, protocol::Access access,
+                   const std::function<void()>& reply);
+    void unsubscribe(const Client& client, protocol::Access access);
     /// Sends `client` a fresh keyframe (resync, or catch-up after backpressure).
-    void request_keyframe(const std::shared_ptr<Client>& client, bool catch_up);
+    void request_keyframe(const std::shared_ptr<Client>& client, protocol::Access access,
+                          bool catch_up);
     /// A new version, cancelling the work on the current one; replaces an update not yet started.
-    /// Answers an `update`: the next version (or why there is none), built from the latest one
-    /// under a lock so that concurrent updates all apply.
-    /// `reply` gets the result before the new version can produce any frame, and may refuse a
-    /// valid version by returning false (its record could not be stored): it is then not applied.
+    /// Answers an `update` from `requester`: the next version (or why there is none), built from
+    /// the latest one under a lock so that concurrent updates all apply. `reply` gets the result
+    /// before the new version can produce any frame, and may refuse a valid version by returning
+    /// false (its record could not be stored): it is then not applied. Once applied, every other
+    /// subscriber gets `updated` without an id. An update that changes nothing makes no version:
+    /// `reply` gets the latest (and its answer is ignored).
     void update(const protocol::Update& request, const VersionLimits& limits,
-                const std::function<bool(const VersionResult&)>& reply);
+                const Client& requester, const std::function<bool(const VersionResult&)>& reply);
     void set_paused(bool paused);
-    /// Ends the session: subscribers get `closed` with `reason` after the frames already made.
+    /// Ends the session at once, whatever its worker is doing (the work is cancelled): every
+    /// subscriber gets `closed` with `reason` after the frames already queued, and nothing more.
     void close(protocol::Closed::Reason reason);
+
+    /// The memory the session may come to hold: its latest triangle budget's projection.
+    std::uint64_t reservation() const;
+    /// The memory it holds now (estimated at the end of its last turn).
+    std::uint64_t memory_estimate() const { return memory_estimate_; }
+    /// The CPU time its turns have used.
+    Clock::duration cpu_time() const { return Clock::duration(cpu_time_.load()); }
 
     /// The latest version requested (the base of the next update).
     FunctionVersion latest() const;
@@ -108,22 +147,56 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     bool run_slice() override;
 
   private:
+    struct Subscriber {
+        std::weak_ptr<Client> client;
+        protocol::Access access = protocol::Access::control;
+    };
+    struct LiveSubscriber {
+        std::shared_ptr<Client> client;
+        protocol::Access access = protocol::Access::control;
+    };
     struct KeyframeRequest {
         std::weak_ptr<Client> client;
         bool catch_up = false;
+        protocol::Access access = protocol::Access::control;
     };
     struct Inbox {
         std::optional<FunctionVersion> version;
         std::vector<KeyframeRequest> keyframes;
-        std::vector<std::shared_ptr<Client>> subscribers;
-        std::optional<protocol::Closed::Reason> closing;
+        std::vector<LiveSubscriber> subscribers;
         bool paused = false;
         bool finished = false;
+    };
+    /// A frame naming the control id and, made on first use, its copy naming the view id.
+    struct FrameCopies {
+        std::shared_ptr<const Bytes> control;
+        std::shared_ptr<const Bytes> view;
     };
     enum class Start { started, superseded, failed };
 
     Inbox take_inbox();
     void schedule();
+    /// One turn (run_slice without the budgets around it).
+    bool turn();
+    /// After a turn: charges its CPU time and estimates the memory; false when a budget is spent.
+    bool within_budgets(Clock::duration turn_cpu);
+    void requeue_keyframes(std::vector<KeyframeRequest> requests);
+    /// True while a new function is half applied (vertices partly moved): no frame may go out,
+    /// since it would mix two surfaces.
+    bool mid_change() const;
+    /// The watchdog alarm for a phase 1 (the version's CPU-time limit).
+    Watchdog::Guard arm_eval_limit();
+    const std::shared_ptr<const Bytes>& frame_for(protocol::Access access,
+                                                  FrameCopies& frame) const;
+    void push_keyframes(const std::vector<LiveSubscriber>& to,
+                        const std::shared_ptr<const Bytes>& frame, Clock::time_point created);
+    /// Sends `message` (about this session) to each of `to`, naming the id each holds; with
+    /// `sequence`, only to connections that have reached that frame (OutputQueue).
+    template <class Message>
+    void broadcast(const std::vector<LiveSubscriber>& to, Message message,
+                   std::optional<std::uint64_t> sequence, bool droppable = false);
+    /// Ends every subscription with `closed`; false when the session had ended already.
+    bool end_subscriptions(protocol::Closed::Reason reason);
     Start start_version(FunctionVersion version, Inbox& inbox);
     Start restart(FunctionVersion& version, Inbox& inbox);
     bool refine_turn(Inbox& inbox);
@@ -140,28 +213,31 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     void send_converged(const Inbox& inbox);
     void observe_slice(Clock::time_point start);
     std::shared_ptr<const Bytes> encode_keyframe(std::uint16_t flags, std::uint32_t version) const;
-    void broadcast(const std::vector<std::shared_ptr<Client>>& to,
-                   const protocol::ServerMessage& message, bool droppable = false);
     /// Ends the session after a failure: `error` then `closed` to every subscriber.
     void fail(protocol::ErrorCode code, const std::string& message,
               const std::optional<protocol::RequestId>& request_id);
     void finish(protocol::Closed::Reason reason);
-    std::vector<std::shared_ptr<Client>> live_subscribers();
+    std::vector<LiveSubscriber> live_subscribers();
+    std::vector<LiveSubscriber> live_subscribers_locked() const;
 
     const protocol::SessionId id_;
+    const protocol::SessionId view_id_;
+    const std::uint64_t serial_;
     SessionServices services_;
     EndHandler on_end_;
     std::atomic<bool> cancel_{false};     // stop the current phase 1 or step
     std::atomic<bool> timed_out_{false};  // raised by the watchdog with cancel_
+    std::atomic<bool> cpu_spent_{false};  // the session's CPU budget ran out during a turn
+    std::atomic<Clock::rep> cpu_time_{0};
+    std::atomic<std::uint64_t> memory_estimate_{0};
 
     // The inbox, guarded by mutex_.
     std::mutex update_mutex_;  // serializes update()
     mutable std::mutex mutex_;
     FunctionVersion latest_;
     std::optional<FunctionVersion> pending_version_;
-    std::vector<std::weak_ptr<Client>> subscribers_;
+    std::vector<Subscriber> subscribers_;
     std::vector<KeyframeRequest> keyframe_requests_;
-    std::optional<protocol::Closed::Reason> closing_;
     bool paused_ = false;
     bool finished_ = false;
     Clock::time_point last_request_;
@@ -186,6 +262,8 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     RefineCounters counters_at_version_;
     std::optional<protocol::Converged> converged_message_;  // for late joiners
     std::size_t splits_since_progress_ = 0;
+    bool last_frame_converged_ = false;  // the last frame sent carries the converged flag
+    std::uint32_t wire_version_ = 0;     // the function version of wire_'s content
 };
 
 }  // namespace isomesh::server

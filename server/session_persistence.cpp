@@ -74,10 +74,12 @@ void SessionPersistence::failed(const char* what, const std::string& message) {
 }
 
 SessionPersistence::Outcome SessionPersistence::save(const protocol::SessionId& id,
+                                                     const protocol::SessionId& view,
                                                      const FunctionVersion& version) {
     if (!store_) return Outcome::ok;
     store::SessionRecord record;
     record.id = id;
+    record.view = view;
     record.version = version.state.version;
     record.definition = definition_of(version);
     record.owner = owner_;
@@ -102,11 +104,29 @@ bool SessionPersistence::exists(const protocol::SessionId& id) {
     auto owners = attempt<std::vector<std::string>>(
         metrics_.store_read_seconds, "owners",
         [&](store::SessionStore& s) { return s.owners(std::span(&id, 1)); });
-    return owners && !owners->empty() && !owners->front().empty();
+    if (owners && !owners->empty() && !owners->front().empty()) return true;
+    auto control = control_of(id);
+    return control && *control;
+}
+
+std::optional<std::optional<protocol::SessionId>> SessionPersistence::control_of(
+    const protocol::SessionId& view) {
+    return attempt<std::optional<protocol::SessionId>>(
+        metrics_.store_read_seconds, "control_of",
+        [&](store::SessionStore& s) { return s.control_of(view); });
 }
 
 SessionPersistence::Claimed SessionPersistence::claim(const protocol::SessionId& id) {
     if (!store_) return {};
+    auto claimed = claim_record(id);
+    if (claimed.outcome != Outcome::missing) return claimed;
+    auto control = control_of(id);  // `id` may be a view id
+    if (!control) return {Outcome::unavailable, std::nullopt};
+    if (!*control) return claimed;
+    return claim_record(**control);
+}
+
+SessionPersistence::Claimed SessionPersistence::claim_record(const protocol::SessionId& id) {
     {
         std::lock_guard lock(mutex_);
         if (removals_.contains(id)) return {};  // ended here; its deletion waits for the store
@@ -134,7 +154,14 @@ void SessionPersistence::touch(const std::vector<store::Activity>& activity) {
 
 std::optional<SessionPersistence::Ownership> SessionPersistence::check(
     const std::vector<protocol::SessionId>& ids) {
-    if (ids.empty()) return Ownership{};
+    if (ids.empty()) {
+        // Nothing to check, but a server without sessions must notice the store going down too
+        // (/readyz): it asks whether the store answers.
+        auto answer = attempt<store::Status>(metrics_.store_read_seconds, "ping",
+                                             [](store::SessionStore& s) { return s.ping(); });
+        if (!answer) return std::nullopt;
+        return Ownership{};
+    }
     auto owners =
         attempt<std::vector<std::string>>(metrics_.store_read_seconds, "owners",
                                           [&](store::SessionStore& s) { return s.owners(ids); });

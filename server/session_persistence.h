@@ -2,6 +2,8 @@
 // the reply that confirms it leaves (`created`, `updated`), deleted when the session ends (close,
 // expiry, failure), and read back to rebuild a session after a restart or on another server.
 //
+// A record also keeps the session's view id, so that a rebuilt session answers to both its ids.
+//
 // A definition is enough to rebuild a session: it is the `create` request that makes the session's
 // latest version (source, every parameter value, box, constraints in force), and meshes are
 // deterministic, so the rebuilt session converges to the mesh a new session with that definition
@@ -59,8 +61,9 @@ class SessionPersistence {
         unavailable,  ///< the store is down
     };
 
-    /// Writes the record of session `id` at `version`.
-    Outcome save(const protocol::SessionId& id, const FunctionVersion& version);
+    /// Writes the record of session `id` (view id `view`) at `version`.
+    Outcome save(const protocol::SessionId& id, const protocol::SessionId& view,
+                 const FunctionVersion& version);
     /// Deletes the record of an ended session; retried by maintain() while the store is down.
     void remove(const protocol::SessionId& id);
 
@@ -68,9 +71,11 @@ class SessionPersistence {
         Outcome outcome = Outcome::missing;
         std::optional<store::SessionRecord> record;  // when ok
     };
-    /// True when `id` has a record (false too while the store is down).
+    /// True when `id` (a session's id or view id) has a record (false too while the store is
+    /// down).
     bool exists(const protocol::SessionId& id);
-    /// Takes over the record of `id` (this server serves it from now on).
+    /// Takes over the record of `id`, a session's id or view id (this server serves it from now
+    /// on).
     Claimed claim(const protocol::SessionId& id);
     /// Every record not idle since before `active_after_us`, taken over (an unshared store at
     /// start); the older ones are deleted.
@@ -82,7 +87,8 @@ class SessionPersistence {
         std::vector<protocol::SessionId> moved;    ///< another server owns them now
         std::vector<protocol::SessionId> missing;  ///< their record is gone
     };
-    /// Checks who owns the records of `ids` (sessions live here); nothing while the store is down.
+    /// Checks who owns the records of `ids` (sessions live here; none: whether the store answers);
+    /// nothing while the store is down.
     std::optional<Ownership> check(const std::vector<protocol::SessionId>& ids);
 
     /// The housekeeper's turn: probes a store that is down, retries deletions.
@@ -94,6 +100,10 @@ class SessionPersistence {
     template <class T, class Call>
     std::optional<T> attempt(Histogram& histogram, const char* what, Call&& call);
     void failed(const char* what, const std::string& message);
+    /// The id of the session whose view id is `view` (nothing inside: none); nothing while the
+    /// store is down.
+    std::optional<std::optional<protocol::SessionId>> control_of(const protocol::SessionId& view);
+    Claimed claim_record(const protocol::SessionId& id);
     void retry_removals();
 
     std::unique_ptr<store::SessionStore> store_;

@@ -95,12 +95,18 @@ FileResult load_static_file(const std::string& web_root, std::string_view target
     const auto relative = safe_relative_path(*decoded);
     if (!relative) return {FileLookup::forbidden, {}};
 
-    const bool root_index = relative->empty() || *relative == "index.html";
+    // "/index.html/" names a folder: only a folder may be served under a path ending in '/'.
+    const bool folder_path = decoded->back() == '/';
+    const bool root_index = relative->empty() || (*relative == "index.html" && !folder_path);
     const FileResult builtin{FileLookup::found, {builtin_index_page(), "text/html; charset=utf-8"}};
     if (web_root.empty()) return root_index ? builtin : FileResult{};
     std::error_code error;
     fs::path path = fs::path(web_root) / *relative;
-    if (fs::is_directory(path, error)) path /= "index.html";
+    if (fs::is_directory(path, error)) {
+        path /= "index.html";
+    } else if (folder_path) {
+        return FileResult{};
+    }
     if (!fs::is_regular_file(path, error)) return root_index ? builtin : FileResult{};
     // Symbolic links may point anywhere: serve only what resolves inside the root.
     const fs::path root = fs::weakly_canonical(web_root, error);

@@ -1,5 +1,8 @@
-// Deadlines for work that cannot stop itself: a phase-1 polygonization (or a refinement step)
-// that runs past the evaluation time limit gets its cancel flag raised by this thread.
+// CPU-time limits for work that cannot stop itself: a phase-1 polygonization (or a refinement
+// step) whose thread uses more CPU time than allowed gets its cancel flag raised by this thread.
+// The limits count the CPU time of the working thread itself, not the wall clock, so work slowed
+// down by a busy machine is not cut short. The watchdog sleeps until the earliest moment an alarm
+// could be due (a thread cannot use CPU time faster than the clock runs), then looks again.
 #pragma once
 
 #include <atomic>
@@ -8,6 +11,8 @@
 #include <map>
 #include <mutex>
 #include <thread>
+
+#include <time.h>
 
 #include "server/clock.h"
 
@@ -20,7 +25,8 @@ class Watchdog {
     Watchdog(const Watchdog&) = delete;
     Watchdog& operator=(const Watchdog&) = delete;
 
-    /// While alive, raises `expired` then `cancel` once `deadline` passes.
+    /// While alive, raises `expired` then `cancel` once the calling thread has used `cpu_time`
+    /// more CPU time than it had when arm() was called.
     class Guard {
       public:
         Guard(Guard&& other) noexcept : owner_(other.owner_), token_(other.token_) {
@@ -39,12 +45,13 @@ class Watchdog {
         std::uint64_t token_;
     };
 
-    [[nodiscard]] Guard arm(Clock::time_point deadline, std::atomic<bool>& cancel,
+    [[nodiscard]] Guard arm(Clock::duration cpu_time, std::atomic<bool>& cancel,
                             std::atomic<bool>& expired);
 
   private:
     struct Alarm {
-        Clock::time_point deadline;
+        clockid_t clock;               // the armed thread's CPU clock
+        Clock::duration cpu_deadline;  // on that clock
         std::atomic<bool>* cancel;
         std::atomic<bool>* expired;
     };

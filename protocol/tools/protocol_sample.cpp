@@ -7,6 +7,8 @@
 //   isomesh-protocol-sample messages DIR writes one sample of every control message as
 //                                        DIR/<type>.json
 //   isomesh-protocol-sample stats        prints bytes per triangle of deltas of several sizes
+//   isomesh-protocol-sample echo-id JSON prints {"accepted": true|false}: whether the C++ parser
+//                                        takes JSON (a value) as the id of a ping
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -125,11 +127,14 @@ std::vector<std::pair<std::string, std::string>> sample_messages() {
     client(MessageType::close, Close{6, session});
     client(MessageType::resync, Resync{std::nullopt, session});
     client(MessageType::ping, Ping{8});
-    server(MessageType::created, Created{1, session, state});
-    server(MessageType::updated, Updated{"slider-7", session, state});
-    server(MessageType::subscribed, Subscribed{2, session, state});
+    SessionId view = session;
+    view.bytes[0] ^= 0xFF;
+    const ServerLimits limits{1 << 20, 16, 2'000'000, 1u << 30, 10.0, 3600.0, 3600.0, 30.0};
+    server(MessageType::created, Created{1, session, state, view, Access::control});
+    server(MessageType::updated, Updated{"slider-7", session, state, view, Access::control});
+    server(MessageType::subscribed, Subscribed{2, view, state, std::nullopt, Access::view});
     server(MessageType::ack, Ack{4, MessageType::pause, session});
-    server(MessageType::pong, Pong{8, kSampleTime});
+    server(MessageType::pong, Pong{8, kSampleTime, limits});
     server(MessageType::progress, Progress{session, 3, 12, 8000, 0.02, 1.5, 250000});
     server(MessageType::converged,
            Converged{session, 3, 40, 20000, 0.001, 0.9, 9500, 120, 2.5, 41.0});
@@ -190,13 +195,21 @@ int print_stats() {
     return 0;
 }
 
+int echo_id(const std::string& id_json) {
+    const auto parsed = parse_client_message(R"({"v":1,"type":"ping","id":)" + id_json + "}");
+    std::printf("{\"accepted\": %s}\n", parsed ? "true" : "false");
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    const std::string usage = "usage: isomesh-protocol-sample frames DIR | messages DIR | stats\n";
+    const std::string usage =
+        "usage: isomesh-protocol-sample frames DIR | messages DIR | stats | echo-id JSON\n";
     if (argc == 3 && std::string(argv[1]) == "frames") return write_frames(argv[2]);
     if (argc == 3 && std::string(argv[1]) == "messages") return write_messages(argv[2]);
     if (argc == 2 && std::string(argv[1]) == "stats") return print_stats();
+    if (argc == 3 && std::string(argv[1]) == "echo-id") return echo_id(argv[2]);
     std::cerr << usage;
     return 2;
 }

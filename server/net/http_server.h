@@ -4,8 +4,10 @@
 //   /readyz    readiness: "ready", or 503 with the reason (draining, the session store down)
 //   /metrics   Prometheus text format
 //   anything else: the browser client's files (server/static_files.h)
-// SIGINT and SIGTERM drain: stop accepting, end sessions with `closed`, let queued frames leave
-// (at most the drain timeout), close every connection with a close frame, then run() returns.
+// SIGINT, SIGTERM and SIGHUP drain: new WebSockets and sessions are refused (/healthz answers
+// 503 "draining"), every session ends at once with `closed` (its work cancelled), queued frames
+// leave (at most the drain timeout), every WebSocket closes with code 1001, then run() returns.
+// HTTP connections beyond the limit, and on EMFILE, make room by closing the oldest one.
 #pragma once
 
 #include <cstdint>
@@ -32,6 +34,10 @@ class HttpServer {
     /// Serves on config.io_threads threads (this one included) until a signal has drained
     /// everything.
     void run();
+
+    /// When the drain (if one started) must be over: the process may exit then, whatever its
+    /// workers are doing. time_point::max() before a drain.
+    Clock::time_point drain_deadline() const;
 
   private:
     struct Impl;

@@ -20,12 +20,25 @@ bool routine(beast::error_code ec) {
 
 void ConnectionSet::add(const std::shared_ptr<Closable>& connection) {
     std::lock_guard lock(mutex_);
-    connections_[connection.get()] = connection;
+    const std::uint64_t order = next_++;
+    connections_[order] = connection;
+    order_[connection.get()] = order;
 }
 
 void ConnectionSet::remove(const Closable* connection) {
     std::lock_guard lock(mutex_);
-    connections_.erase(connection);
+    auto it = order_.find(connection);
+    if (it == order_.end()) return;
+    connections_.erase(it->second);
+    order_.erase(it);
+}
+
+std::shared_ptr<Closable> ConnectionSet::oldest() const {
+    std::lock_guard lock(mutex_);
+    for (const auto& [order, weak] : connections_) {
+        if (auto connection = weak.lock()) return connection;
+    }
+    return nullptr;
 }
 
 std::size_t ConnectionSet::size() const {
@@ -68,9 +81,7 @@ void WebSocketConnection::start(http::request<http::string_body> request,
     ws_.set_option(timeouts);
     ws_.set_option(websocket::stream_base::decorator(
         [](websocket::response_type& response) { response.set(http::field::server, "isomesh"); }));
-    // Messages up to twice the limit are read and answered with too_large; larger ones close
-    // the connection (Beast refuses them while reading).
-    ws_.read_message_max(2 * context_.config.max_message_bytes + 65536);
+    ws_.read_message_max(0);  // any size: read in pieces, and beyond the limit not kept (do_read)
     ws_.async_accept(
         request, beast::bind_front_handler(&WebSocketConnection::on_accept, shared_from_this()));
 }
@@ -91,12 +102,40 @@ void WebSocketConnection::on_accept(beast::error_code ec) {
 }
 
 void WebSocketConnection::do_read() {
-    ws_.async_read(buffer_,
-                   beast::bind_front_handler(&WebSocketConnection::on_read, shared_from_this()));
+    constexpr std::size_t kPiece = 64 * 1024;
+    ws_.async_read_some(
+        buffer_, kPiece,
+        beast::bind_front_handler(&WebSocketConnection::on_read, shared_from_this()));
 }
 
 void WebSocketConnection::on_read(beast::error_code ec, std::size_t) {
     if (ec) return fail(ec, "read");
+    const auto data = buffer_.cdata();
+    const std::string_view piece(static_cast<const char*>(data.data()), data.size());
+    if (!oversized_ && buffer_.size() > context_.config.max_message_bytes) {
+        oversized_ = true;  // from here on the message is only scanned and counted
+        oversized_bytes_ = 0;
+        id_scanner_ = {};
+    }
+    if (oversized_) {
+        oversized_bytes_ += piece.size();
+        id_scanner_.feed(piece);
+        buffer_.consume(buffer_.size());
+    }
+    if (ws_.is_message_done()) deliver();
+    do_read();
+}
+
+void WebSocketConnection::deliver() {
+    if (oversized_) {
+        oversized_ = false;
+        if (ws_.got_text()) {
+            context_.service.receive_oversized(client_, oversized_bytes_, id_scanner_.id());
+        } else {
+            context_.service.receive_binary(client_);
+        }
+        return;
+    }
     if (ws_.got_text()) {
         const auto data = buffer_.cdata();
         context_.service.receive(
@@ -105,7 +144,6 @@ void WebSocketConnection::on_read(beast::error_code ec, std::size_t) {
         context_.service.receive_binary(client_);
     }
     buffer_.consume(buffer_.size());
-    do_read();
 }
 
 void WebSocketConnection::wake() {

@@ -4,6 +4,10 @@
 // the byte budget. Every error ends the connection the same way: fail() logs it and end() tells
 // the service that the client is gone.
 //
+// Messages are read in pieces, so that one over the size limit is not kept: its first bytes
+// (up to the limit) are kept and the rest only scanned for the request id, then it is answered
+// with too_large and the connection stays open (PROTOCOL.md, 7).
+//
 // Included only by the net/*.cpp files: Beast compiles slowly.
 #pragma once
 
@@ -17,7 +21,10 @@
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
 
+#include "protocol/messages.h"
+#include "server/handshake.h"
 #include "server/mesh_service.h"
+#include "server/net/filtered_stream.h"
 
 namespace isomesh::server::net {
 
@@ -37,17 +44,21 @@ class Closable {
     virtual void abort() = 0;
 };
 
-/// The open connections, for shutdown and the connection limit.
+/// The open connections, for shutdown and the connection limits, oldest first.
 class ConnectionSet {
   public:
     void add(const std::shared_ptr<Closable>& connection);
     void remove(const Closable* connection);
     std::size_t size() const;
     std::vector<std::shared_ptr<Closable>> all() const;
+    /// The connection added first among those still open, if any.
+    std::shared_ptr<Closable> oldest() const;
 
   private:
     mutable std::mutex mutex_;
-    std::map<const Closable*, std::weak_ptr<Closable>> connections_;
+    std::uint64_t next_ = 0;
+    std::map<std::uint64_t, std::weak_ptr<Closable>> connections_;  // by order of addition
+    std::map<const Closable*, std::uint64_t> order_;
 };
 
 /// What connections share.
@@ -58,6 +69,7 @@ struct NetContext {
     const ServerConfig& config;
     ConnectionSet& websockets;
     ConnectionSet& http_sessions;
+    const OriginPolicy& origins;
 };
 
 class WebSocketConnection final : public Closable,
@@ -75,6 +87,8 @@ class WebSocketConnection final : public Closable,
     void on_accept(beast::error_code ec);
     void do_read();
     void on_read(beast::error_code ec, std::size_t bytes);
+    /// A whole message has been read: hands it to the service.
+    void deliver();
     /// From any thread: the output queue has something while the writer was idle.
     void wake();
     void do_write();
@@ -84,9 +98,13 @@ class WebSocketConnection final : public Closable,
     void fail(beast::error_code ec, const char* what);
     void end();
 
-    websocket::stream<beast::tcp_stream> ws_;
+    websocket::stream<FilteredStream> ws_;
     NetContext& context_;
     beast::flat_buffer buffer_;
+    // The message being read is over the limit: its bytes are counted and scanned, not kept.
+    bool oversized_ = false;
+    std::uint64_t oversized_bytes_ = 0;
+    protocol::RequestIdScanner id_scanner_;
     std::shared_ptr<Client> client_;
     std::optional<Outgoing> writing_;  // the message in flight
     std::string remote_;

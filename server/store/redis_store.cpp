@@ -9,15 +9,20 @@
 namespace isomesh::server::store {
 namespace {
 
-// KEYS[1] the record; ARGV owner, version, definition, active_us, created_us, ttl.
-// 1: written; 0: another owner holds it.
+// A record is the hash isomesh:session:ID; its view id, when known, also names the key
+// isomesh:view:VIEW holding ID, which lives as long as the record. The scripts name that key from
+// the record's `view` field (one Redis, not a Redis Cluster).
+
+// KEYS[1] the record, KEYS[2] its view key (absent when the view id is unknown); ARGV owner,
+// version, definition, active_us, created_us, ttl, view, id. 1: written; 0: another owner holds it.
 constexpr const char* kSave = R"lua(
 local owner = redis.call('HGET', KEYS[1], 'owner')
 if owner and owner ~= ARGV[1] then return 0 end
 redis.call('HSET', KEYS[1], 'owner', ARGV[1], 'version', ARGV[2], 'definition', ARGV[3],
-           'active_us', ARGV[4])
+           'active_us', ARGV[4], 'view', ARGV[7])
 redis.call('HSETNX', KEYS[1], 'created_us', ARGV[5])
 redis.call('EXPIRE', KEYS[1], ARGV[6])
+if KEYS[2] then redis.call('SET', KEYS[2], ARGV[8], 'EX', ARGV[6]) end
 return 1)lua";
 
 // KEYS[1] the record; ARGV owner. 1: deleted; 0: another owner holds it; -1: no record.
@@ -25,6 +30,8 @@ constexpr const char* kRemove = R"lua(
 local owner = redis.call('HGET', KEYS[1], 'owner')
 if not owner then return -1 end
 if owner ~= ARGV[1] then return 0 end
+local view = redis.call('HGET', KEYS[1], 'view')
+if view and view ~= '' then redis.call('DEL', 'isomesh:view:' .. view) end
 redis.call('DEL', KEYS[1])
 return 1)lua";
 
@@ -34,6 +41,8 @@ for i, key in ipairs(KEYS) do
   if redis.call('HGET', key, 'owner') == ARGV[1] then
     redis.call('HSET', key, 'active_us', ARGV[i + 2])
     redis.call('EXPIRE', key, ARGV[2])
+    local view = redis.call('HGET', key, 'view')
+    if view and view ~= '' then redis.call('EXPIRE', 'isomesh:view:' .. view, ARGV[2]) end
   end
 end
 return 1)lua";
@@ -43,7 +52,9 @@ constexpr const char* kClaim = R"lua(
 if redis.call('EXISTS', KEYS[1]) == 0 then return false end
 redis.call('HSET', KEYS[1], 'owner', ARGV[1])
 redis.call('EXPIRE', KEYS[1], ARGV[2])
-return redis.call('HMGET', KEYS[1], 'version', 'definition', 'created_us', 'active_us'))lua";
+local view = redis.call('HGET', KEYS[1], 'view')
+if view and view ~= '' then redis.call('EXPIRE', 'isomesh:view:' .. view, ARGV[2]) end
+return redis.call('HMGET', KEYS[1], 'version', 'definition', 'created_us', 'active_us', 'view'))lua";
 
 // KEYS the records. Each one's owner, '' when there is none.
 constexpr const char* kOwners = R"lua(
@@ -55,6 +66,14 @@ constexpr std::size_t kBatch = 256;  // keys per script call of touch() and owne
 
 std::string key(const protocol::SessionId& id) {
     return "isomesh:session:" + id.to_hex();
+}
+
+std::string view_key(const protocol::SessionId& view) {
+    return "isomesh:view:" + view.to_hex();
+}
+
+bool known(const protocol::SessionId& view) {
+    return view != protocol::SessionId{};
 }
 
 std::string text(const redisReply* reply) {
@@ -151,9 +170,13 @@ StoreResult<RedisStore::Reply> RedisStore::eval(const char* script,
 }
 
 StoreResult<Status> RedisStore::save(const SessionRecord& record) {
-    auto reply = eval(kSave, {key(record.id)},
-                      {record.owner, std::to_string(record.version), record.definition,
-                       std::to_string(record.active_us), std::to_string(record.created_us), ttl_});
+    std::vector<std::string> keys = {key(record.id)};
+    if (known(record.view)) keys.push_back(view_key(record.view));
+    auto reply =
+        eval(kSave, keys,
+             {record.owner, std::to_string(record.version), record.definition,
+              std::to_string(record.active_us), std::to_string(record.created_us), ttl_,
+              known(record.view) ? record.view.to_hex() : std::string(), record.id.to_hex()});
     if (!reply) return reply.error();
     return reply.value()->integer == 1 ? Status::ok : Status::not_owner;
 }
@@ -191,7 +214,7 @@ StoreResult<std::optional<SessionRecord>> RedisStore::claim(const protocol::Sess
     auto reply = eval(kClaim, {key(id)}, {std::string(owner), ttl_});
     if (!reply) return reply.error();
     const redisReply* fields = reply.value().get();
-    if (fields->type != REDIS_REPLY_ARRAY || fields->elements != 4)
+    if (fields->type != REDIS_REPLY_ARRAY || fields->elements != 5)
         return std::optional<SessionRecord>();
     SessionRecord record;
     record.id = id;
@@ -200,7 +223,17 @@ StoreResult<std::optional<SessionRecord>> RedisStore::claim(const protocol::Sess
     record.definition = text(fields->element[1]);
     record.created_us = number(fields->element[2]);
     record.active_us = number(fields->element[3]);
+    record.view =
+        protocol::SessionId::from_hex(text(fields->element[4])).value_or(protocol::SessionId{});
     return std::optional<SessionRecord>(std::move(record));
+}
+
+StoreResult<std::optional<protocol::SessionId>> RedisStore::control_of(
+    const protocol::SessionId& view) {
+    if (!known(view)) return std::optional<protocol::SessionId>();
+    auto reply = command({"GET", view_key(view)});
+    if (!reply) return reply.error();
+    return protocol::SessionId::from_hex(text(reply.value().get()));
 }
 
 StoreResult<std::vector<SessionRecord>> RedisStore::claim_all(std::string_view, std::uint64_t) {

@@ -1,12 +1,13 @@
 // The session store: where servers keep the definition of every session, so that a restart, a
 // crash or another server can rebuild it. Meshes are deterministic, so the definition (the
-// `create` request that makes the session's latest version, and the version number) is all a
-// session needs; frames are never stored.
+// `create` request that makes the session's latest version, and the version number) and the
+// session's view id are all a session needs; frames are never stored.
 //
-// One record per session (SessionRecord). Each record names its *owner*, the server instance that
-// serves the session: writes and deletes apply only for the owner, and a server that loads a
-// session claims it, so that two servers never both accept changes to one session (after a
-// failover the old owner's late writes are refused and it learns that the session moved).
+// One record per session (SessionRecord), found by its id or its view id. Each record names its
+// *owner*, the server instance that serves the session: writes and deletes apply only for the
+// owner, and a server that loads a session claims it, so that two servers never both accept changes
+// to one session (after a failover the old owner's late writes are refused and it learns that the
+// session moved).
 //
 // Implementations: SQLite in WAL mode (sqlite_store.h, one server, the default) and Redis
 // (redis_store.h, shared by every server of a cluster). Every call is synchronous, thread-safe and
@@ -29,6 +30,9 @@ namespace isomesh::server::store {
 /// What a store keeps of one session.
 struct SessionRecord {
     protocol::SessionId id;
+    /// The session's read-only view id (PROTOCOL.md 3.2); all zeros in records written before
+    /// view ids were kept.
+    protocol::SessionId view;
     std::uint32_t version = 1;  ///< the function version the definition makes
     /// The `create` message (JSON text, PROTOCOL.md) that makes the session's latest version:
     /// source, every parameter value supplied so far, box and the constraints in force.
@@ -85,6 +89,9 @@ class SessionStore {
     /// others (a server starting on an unshared store).
     virtual StoreResult<std::vector<SessionRecord>> claim_all(std::string_view owner,
                                                               std::uint64_t active_after_us) = 0;
+    /// The id of the session whose view id is `view`; nothing when no record has it.
+    virtual StoreResult<std::optional<protocol::SessionId>> control_of(
+        const protocol::SessionId& view) = 0;
     /// The owner of each of `ids`, in order ("" for a session without a record).
     virtual StoreResult<std::vector<std::string>> owners(
         std::span<const protocol::SessionId> ids) = 0;

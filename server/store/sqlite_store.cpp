@@ -12,18 +12,31 @@ constexpr const char* kSchema =
     "  version INTEGER NOT NULL,"
     "  definition TEXT NOT NULL,"
     "  created_us INTEGER NOT NULL,"
-    "  active_us INTEGER NOT NULL)";
+    "  active_us INTEGER NOT NULL,"
+    "  view TEXT NOT NULL DEFAULT '')";  // 32 hex digits, '' when unknown
+
+// Databases made before view ids were kept get the column; then the index finds records by it.
+constexpr const char* kAddView = "ALTER TABLE sessions ADD COLUMN view TEXT NOT NULL DEFAULT ''";
+constexpr const char* kViewIndex = "CREATE INDEX IF NOT EXISTS sessions_by_view ON sessions (view)";
 
 // A new record, or a new version of one the same owner holds (created_us is kept).
 constexpr const char* kSave =
-    "INSERT INTO sessions (id, owner, version, definition, created_us, active_us)"
-    " VALUES (?1, ?2, ?3, ?4, ?5, ?6)"
+    "INSERT INTO sessions (id, owner, version, definition, created_us, active_us, view)"
+    " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)"
     " ON CONFLICT (id) DO UPDATE SET version = excluded.version,"
-    "   definition = excluded.definition, active_us = excluded.active_us"
+    "   definition = excluded.definition, active_us = excluded.active_us, view = excluded.view"
     " WHERE sessions.owner = excluded.owner";
 
 std::int64_t to_sql(std::uint64_t value) {
     return static_cast<std::int64_t>(value);
+}
+
+std::string view_text(const protocol::SessionId& view) {
+    return view == protocol::SessionId{} ? std::string() : view.to_hex();
+}
+
+protocol::SessionId view_of(const std::string& text) {
+    return protocol::SessionId::from_hex(text).value_or(protocol::SessionId{});
 }
 
 }  // namespace
@@ -90,6 +103,12 @@ StoreResult<std::unique_ptr<SqliteStore>> SqliteStore::open(const std::string& p
                               "; is another isomesh-server using it?)"};
         }
     }
+    if (!Statement(db, "SELECT view FROM sessions LIMIT 0").ok()) {
+        if (auto problem = store->execute(kAddView))
+            return StoreError{"cannot add the view column to " + path + ": " + *problem};
+    }
+    if (auto problem = store->execute(kViewIndex))
+        return StoreError{"cannot index " + path + ": " + *problem};
     return store;
 }
 
@@ -120,7 +139,8 @@ StoreResult<Status> SqliteStore::save(const SessionRecord& record) {
         .bind(3, std::int64_t{record.version})
         .bind(4, record.definition)
         .bind(5, to_sql(record.created_us))
-        .bind(6, to_sql(record.active_us));
+        .bind(6, to_sql(record.active_us))
+        .bind(7, view_text(record.view));
     if (save.step() != SQLITE_DONE) return error("save");
     return save.changes() == 0 ? Status::not_owner : Status::ok;
 }
@@ -166,7 +186,8 @@ StoreResult<std::optional<SessionRecord>> SqliteStore::claim(const protocol::Ses
     std::lock_guard lock(mutex_);
     Statement claim(db_, "UPDATE sessions SET owner = ?1 WHERE id = ?2");
     Statement read(db_,
-                   "SELECT version, definition, created_us, active_us FROM sessions WHERE id = ?1");
+                   "SELECT version, definition, created_us, active_us, view FROM sessions"
+                   " WHERE id = ?1");
     if (!claim.ok() || !read.ok()) return error("claim");
     claim.bind(1, owner).bind(2, id.to_hex());
     if (claim.step() != SQLITE_DONE) return error("claim");
@@ -180,6 +201,7 @@ StoreResult<std::optional<SessionRecord>> SqliteStore::claim(const protocol::Ses
     record.definition = read.text(1);
     record.created_us = static_cast<std::uint64_t>(read.integer(2));
     record.active_us = static_cast<std::uint64_t>(read.integer(3));
+    record.view = view_of(read.text(4));
     return std::optional<SessionRecord>(std::move(record));
 }
 
@@ -208,7 +230,7 @@ StoreResult<std::vector<SessionRecord>> SqliteStore::claim_all(std::string_view 
 
 StoreResult<std::vector<SessionRecord>> SqliteStore::select_all() {
     Statement all(db_,
-                  "SELECT id, owner, version, definition, created_us, active_us FROM sessions"
+                  "SELECT id, owner, version, definition, created_us, active_us, view FROM sessions"
                   " ORDER BY created_us");
     if (!all.ok()) return error("select");
     std::vector<SessionRecord> records;
@@ -223,10 +245,24 @@ StoreResult<std::vector<SessionRecord>> SqliteStore::select_all() {
         record.definition = all.text(3);
         record.created_us = static_cast<std::uint64_t>(all.integer(4));
         record.active_us = static_cast<std::uint64_t>(all.integer(5));
+        record.view = view_of(all.text(6));
         records.push_back(std::move(record));
     }
     if (step != SQLITE_DONE) return error("select");
     return records;
+}
+
+StoreResult<std::optional<protocol::SessionId>> SqliteStore::control_of(
+    const protocol::SessionId& view) {
+    std::lock_guard lock(mutex_);
+    Statement find(db_, "SELECT id FROM sessions WHERE view = ?1");
+    if (!find.ok()) return error("control_of");
+    find.bind(1, view_text(view));
+    const int step = find.step();
+    if (step != SQLITE_ROW && step != SQLITE_DONE) return error("control_of");
+    if (step == SQLITE_DONE || view == protocol::SessionId{})
+        return std::optional<protocol::SessionId>();
+    return protocol::SessionId::from_hex(find.text(0));
 }
 
 StoreResult<std::vector<std::string>> SqliteStore::owners(

@@ -32,6 +32,8 @@ class SqliteStore final : public SessionStore {
                                                     std::string_view owner) override;
     StoreResult<std::vector<SessionRecord>> claim_all(std::string_view owner,
                                                       std::uint64_t active_after_us) override;
+    StoreResult<std::optional<protocol::SessionId>> control_of(
+        const protocol::SessionId& view) override;
     StoreResult<std::vector<std::string>> owners(std::span<const protocol::SessionId> ids) override;
     StoreResult<Status> ping() override;
 

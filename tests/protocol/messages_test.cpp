@@ -98,6 +98,12 @@ TEST(Messages, server_messages_round_trip) {
     const SessionState state{4, "x^2=a", {{"a", 2}}, kBox, {1000, 0.0, "epsilon4"}};
     const SessionState vm_state{1, std::nullopt, {}, kBox, {50, 0.5, "distance"}};
     expect_server_round_trip(Created{7, kSession, state});
+    SessionId view = kSession;
+    view.bytes[3] = 0x42;
+    expect_server_round_trip(Created{7, kSession, state, view, Access::control});
+    expect_server_round_trip(Subscribed{8, view, state, std::nullopt, Access::view});
+    expect_server_round_trip(
+        Pong{2, 5, ServerLimits{1 << 20, 16, 2'000'000, 1u << 30, 10.0, 3600.0, 3600.0, 30.0}});
     expect_server_round_trip(Updated{std::nullopt, kSession, vm_state});
     expect_server_round_trip(Subscribed{"s", kSession, state});
     expect_server_round_trip(Ack{9, MessageType::resync, kSession});
@@ -166,6 +172,56 @@ TEST(Messages, request_id_is_returned_with_errors) {
     expect_client_error(request("ping", R"("id":{})"), ErrorCode::bad_field);
     expect_client_error(request("ping", cat({R"("id":")", std::string(65, 'x'), "\""})),
                         ErrorCode::bad_field);
+}
+
+TEST(Messages, errors_of_unparsed_messages_echo_the_id_a_scan_finds) {
+    // Nested too deeply: never parsed, but the id is read from the text.
+    std::string deep = R"({"v":1,"type":"ping","id":"deep-1","x":)";
+    for (int i = 0; i < 40; ++i) deep += "[";
+    for (int i = 0; i < 40; ++i) deep += "]";
+    deep += "}";
+    const RequestError nested = client_error(deep);
+    EXPECT_EQ(nested.error.code, ErrorCode::bad_json);
+    EXPECT_EQ(nested.id, RequestId(std::string("deep-1")));
+    // Too large, with the id after the bulk.
+    ParseLimits limits;
+    limits.max_message_bytes = 100;
+    const std::string big =
+        cat({R"({"v":1,"type":"ping","pad":")", std::string(200, 'x'), R"(","id":17})"});
+    const RequestError large = client_error(big, limits);
+    EXPECT_EQ(large.error.code, ErrorCode::too_large);
+    EXPECT_EQ(large.id, RequestId(std::int64_t{17}));
+    // Not JSON at all after the id.
+    EXPECT_EQ(client_error(R"({"id": -3, "v":1, "type": )").id, RequestId(std::int64_t{-3}));
+}
+
+TEST(RequestIdScanner, finds_the_top_level_id_in_pieces_of_any_size) {
+    const std::string text =
+        R"({"x":{"id":1},"ids":[{"id":2}],"s":"\"id\":3","id":"a\"b\u00e9","id":9})";
+    for (std::size_t piece : {1u, 2u, 3u, 7u, 1000u}) {
+        RequestIdScanner scanner;
+        for (std::size_t i = 0; i < text.size(); i += piece)
+            scanner.feed(std::string_view(text).substr(i, piece));
+        EXPECT_EQ(scanner.id(), RequestId(std::string("a\"b\u00e9"))) << piece;
+    }
+    EXPECT_FALSE(scan_request_id(R"({"id":1.5})"));
+    EXPECT_FALSE(scan_request_id(R"({"id":{"a":1}})"));
+    EXPECT_FALSE(scan_request_id(cat({R"({"id":")", std::string(65, 'y'), "\"}"})));
+    EXPECT_EQ(scan_request_id(R"({ "id" : 42 })"), RequestId(std::int64_t{42}));
+    EXPECT_FALSE(scan_request_id("[1,2,3]"));
+}
+
+TEST(Messages, string_limits_count_characters) {
+    std::string id;
+    for (int i = 0; i < 64; ++i) id += "\u00e9";  // 64 characters, 128 bytes
+    EXPECT_TRUE(parse_client_message(request("ping", cat({R"("id":")", id, "\""}))));
+    EXPECT_FALSE(parse_client_message(request("ping", cat({R"("id":")", id, "e\""}))));
+    std::string name;
+    for (int i = 0; i < 64; ++i) name += "\u03b1";  // 64 Greek alphas
+    EXPECT_TRUE(parse_client_message(request(
+        "create",
+        cat({R"("expression":"x","box":[0,1,0,1,0,1],"parameters":{")", name, R"(":1})"}))));
+    EXPECT_EQ(utf8_characters("a\u00e9\U0001F600"), 3u);
 }
 
 TEST(Messages, unknown_fields_are_rejected_in_requests) {

@@ -85,6 +85,31 @@ TEST(ParseConfig, help_is_requested_and_lists_every_variable) {
         EXPECT_NE(usage.find(name), std::string::npos) << name;
 }
 
+TEST(ParseConfig, budgets_and_access_options) {
+    const ServerConfig c =
+        parsed({"--max-sessions", "8", "--max-memory-mb", "512", "--session-memory-mb", "64",
+                "--session-cpu-s", "2.5", "--max-http-connections", "32", "--allow-origin",
+                "https://app.example, http://localhost:5173"});
+    EXPECT_EQ(c.max_sessions, 8u);
+    EXPECT_EQ(resolved_max_memory_bytes(c), std::uint64_t{512} << 20);
+    EXPECT_EQ(c.session_memory_mb, 64u);
+    EXPECT_DOUBLE_EQ(c.session_cpu_s, 2.5);
+    EXPECT_EQ(c.max_http_connections, 32u);
+    EXPECT_EQ(c.allow_origin, "https://app.example, http://localhost:5173");
+    EXPECT_GT(resolved_max_memory_bytes(parsed({})), 0u);  // 0: half the physical memory
+    EXPECT_NE(error_of({"--allow-origin", "app.example"}).find("--allow-origin"),
+              std::string::npos);
+    EXPECT_NE(error_of({"--max-sessions", "0"}).find("--max-sessions"), std::string::npos);
+}
+
+TEST(ParseConfig, help_documents_the_signals_and_every_budget) {
+    const std::string usage = config_usage();
+    for (const char* text : {"SIGHUP", "does not reload", "503", "1001", "--max-sessions",
+                             "--max-memory-mb", "--session-memory-mb", "--session-cpu-s",
+                             "--max-http-connections", "--allow-origin", "CPU time"})
+        EXPECT_NE(usage.find(text), std::string::npos) << text;
+}
+
 TEST(ParseConfig, given_defaults_are_the_base) {
     ServerConfig defaults;
     defaults.web_root = "/opt/web";

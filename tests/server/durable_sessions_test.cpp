@@ -238,6 +238,64 @@ TEST(DurableSessions, shutdown_keeps_records_and_tells_subscribers_the_session_m
     EXPECT_TRUE(store.find(id));
 }
 
+protocol::SessionId view_of(TestConnection& c, std::int64_t id) {
+    const auto* reply = c.find<protocol::Created>(protocol::RequestId{id});
+    EXPECT_TRUE(reply && reply->view);
+    return reply && reply->view ? *reply->view : protocol::SessionId{};
+}
+
+TEST(DurableSessions, a_rebuilt_session_answers_to_its_view_id_read_only) {
+    MemoryStore store;
+    protocol::SessionId id, view;
+    {
+        Server first(store);
+        TestConnection a(first.service);
+        ask(a, sphere(1, 4, 500), 1);
+        id = created(a, 1);
+        view = view_of(a, 1);
+        ASSERT_TRUE(store.find(id));
+        EXPECT_EQ(store.find(id)->view, view);
+    }  // gone, as after kill -9
+    Server second(store);
+    TestConnection b(second.service);
+    ask(b, protocol::Subscribe{1, view}, 1);
+    const auto* subscribed = b.find<protocol::Subscribed>(protocol::RequestId{1});
+    ASSERT_NE(subscribed, nullptr);
+    EXPECT_EQ(subscribed->session, view);
+    EXPECT_EQ(subscribed->access, protocol::Access::view);
+    EXPECT_FALSE(subscribed->view) << "a holder of the view id never learns the control id";
+    ask(b, protocol::Pause{2, view}, 2);
+    ASSERT_NE(error_for(b, 2), nullptr);
+    EXPECT_EQ(error_for(b, 2)->code, ErrorCode::read_only);
+    ask(b, protocol::Subscribe{3, id}, 3);
+    ASSERT_NE(b.find<protocol::Subscribed>(protocol::RequestId{3}), nullptr);
+    EXPECT_EQ(b.find<protocol::Subscribed>(protocol::RequestId{3})->view, view);
+}
+
+TEST(DurableSessions, another_server_rebuilds_a_session_named_by_its_view_id) {
+    MemoryStore store(true);
+    Server one(store), two(store);
+    const Route route = {0x0a, 0x1b, 0x2c, 0x3d};
+    TestConnection a(one.service, route);
+    ask(a, sphere(1, 4, 500), 1);
+    const auto view = view_of(a, 1);
+    EXPECT_EQ(route_of(view), route) << "both ids lead to the session's server";
+
+    TestConnection elsewhere(two.service, Route{1, 2, 3, 4});
+    ask(elsewhere, protocol::Subscribe{1, view}, 1);
+    ASSERT_NE(error_for(elsewhere, 1), nullptr);
+    EXPECT_EQ(error_for(elsewhere, 1)->code, ErrorCode::wrong_route);
+
+    TestConnection b(two.service, route);
+    ask(b, protocol::Subscribe{1, view}, 1);
+    const auto* subscribed = b.find<protocol::Subscribed>(protocol::RequestId{1});
+    ASSERT_NE(subscribed, nullptr);
+    EXPECT_EQ(subscribed->access, protocol::Access::view);
+    EXPECT_EQ(two.service.session_count(), 1u);
+    ASSERT_TRUE(a.wait_for([&] { return a.find<protocol::Closed>() != nullptr; }, 5));
+    EXPECT_EQ(a.find<protocol::Closed>()->reason, protocol::Closed::Reason::moved);
+}
+
 TEST(RouteOfTarget, reads_the_route_parameter) {
     EXPECT_FALSE(route_of_target("/ws").value());
     EXPECT_FALSE(route_of_target("/ws?other=1").value());

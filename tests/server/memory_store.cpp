@@ -86,6 +86,17 @@ StoreResult<std::vector<store::SessionRecord>> MemoryStore::claim_all(
     return out;
 }
 
+StoreResult<std::optional<protocol::SessionId>> MemoryStore::control_of(
+    const protocol::SessionId& view) {
+    if (auto f = failure()) return *f;
+    std::lock_guard lock(mutex_);
+    for (const auto& [id, record] : records_) {
+        if (record.view == view && view != protocol::SessionId{})
+            return std::optional<protocol::SessionId>(id);
+    }
+    return std::optional<protocol::SessionId>();
+}
+
 StoreResult<std::vector<std::string>> MemoryStore::owners(
     std::span<const protocol::SessionId> ids) {
     if (auto f = failure()) return *f;
@@ -124,6 +135,10 @@ class Forwarder final : public store::SessionStore {
     StoreResult<std::vector<store::SessionRecord>> claim_all(std::string_view owner,
                                                              std::uint64_t after) override {
         return to_.claim_all(owner, after);
+    }
+    StoreResult<std::optional<protocol::SessionId>> control_of(
+        const protocol::SessionId& view) override {
+        return to_.control_of(view);
     }
     StoreResult<std::vector<std::string>> owners(
         std::span<const protocol::SessionId> ids) override {

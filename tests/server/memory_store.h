@@ -31,6 +31,8 @@ class MemoryStore final : public store::SessionStore {
                                                                   std::string_view owner) override;
     store::StoreResult<std::vector<store::SessionRecord>> claim_all(
         std::string_view owner, std::uint64_t active_after_us) override;
+    store::StoreResult<std::optional<protocol::SessionId>> control_of(
+        const protocol::SessionId& view) override;
     store::StoreResult<std::vector<std::string>> owners(
         std::span<const protocol::SessionId> ids) override;
     store::StoreResult<store::Status> ping() override;

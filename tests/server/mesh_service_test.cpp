@@ -11,63 +11,19 @@
 #include <glm/geometric.hpp>
 
 #include "progressive/pipeline.h"
-#include "test_connection.h"
+#include "service_fixture.h"
 
 namespace isomesh::server {
 namespace {
 
 using protocol::ErrorCode;
+using testing::create;
+using testing::create_request;
+using testing::error_for;
+using testing::Fixture;
+using testing::test_config;
 using testing::TestConnection;
-
-ServerConfig test_config() {
-    ServerConfig config;
-    config.worker_threads = 2;
-    config.log_level = LogLevel::error;
-    config.max_sessions_per_connection = 3;
-    config.max_triangles = 100'000;
-    return config;
-}
-
-struct Fixture {
-    explicit Fixture(ServerConfig c = test_config())
-        : config(c), logger(c.log_level), service(config, logger, metrics) {}
-    ServerConfig config;
-    Logger logger;
-    Metrics metrics;
-    MeshService service;
-};
-
-protocol::Create create_request(std::string expression, std::uint64_t triangles,
-                                protocol::Parameters parameters = {}, std::int64_t id = 1) {
-    protocol::Create c;
-    c.id = id;
-    c.source.text = std::move(expression);
-    c.parameters = std::move(parameters);
-    c.box = {-3, 3, -3, 3, -3, 3};
-    c.constraints.triangles = triangles;
-    return c;
-}
-
-/// Creates a session and returns its id (failing the test when there is none).
-protocol::SessionId create(TestConnection& connection, const protocol::Create& request) {
-    connection.send(request);
-    EXPECT_TRUE(connection.wait_for([&] {
-        return connection.find<protocol::Created>(request.id) ||
-               connection.find<protocol::ErrorReply>(request.id);
-    }));
-    const auto* created = connection.find<protocol::Created>(request.id);
-    EXPECT_NE(created, nullptr);
-    return created ? created->session : protocol::SessionId{};
-}
-
-bool wait_converged(TestConnection& connection, const protocol::SessionId& session,
-                    std::uint32_t version = 1) {
-    return connection.wait_for([&] {
-        const auto* c = connection.converged(session, version);
-        return c && connection.replicas[session].synchronized() &&
-               connection.replicas[session].sequence() >= c->sequence;
-    });
-}
+using testing::wait_converged;
 
 /// The mesh the CLI would make: the pipeline run to convergence, directly with the core.
 RefinedMesh reference_mesh(const protocol::Create& request) {
@@ -82,10 +38,6 @@ RefinedMesh reference_mesh(const protocol::Create& request) {
     Pipeline pipeline(v.field, settings);
     pipeline.run_to_convergence();
     return pipeline.mesh();
-}
-
-const protocol::ErrorReply* error_for(const TestConnection& c, std::int64_t id) {
-    return c.find<protocol::ErrorReply>(protocol::RequestId{id});
 }
 
 class GallerySurface : public ::testing::TestWithParam<const char*> {};

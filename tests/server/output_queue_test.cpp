@@ -184,3 +184,55 @@ TEST(OutputQueue, close_refuses_everything_and_settles_the_metrics) {
 
 }  // namespace
 }  // namespace isomesh::server
+
+namespace isomesh::server {
+namespace {
+
+/// A frame of `session` whose header carries `sequence` (the rest is not read by the queue).
+std::shared_ptr<const Bytes> numbered_frame(std::uint64_t sequence, std::size_t size = 100) {
+    Bytes bytes(size, 0);
+    for (int i = 0; i < 8; ++i) bytes[24 + i] = static_cast<std::uint8_t>(sequence >> (8 * i));
+    return std::make_shared<const Bytes>(std::move(bytes));
+}
+
+TEST(OutputQueue, session_messages_never_name_a_frame_the_connection_has_not_reached) {
+    OutputQueue queue(1000, {}, nullptr);
+    const protocol::SessionId s{{7}};
+    const auto message = std::make_shared<const std::string>("converged");
+    EXPECT_FALSE(queue.push_session_text(s, message, std::nullopt));  // not followed
+    queue.expect_keyframe(s);
+    EXPECT_FALSE(queue.push_session_text(s, message, 0));  // awaiting its keyframe
+    EXPECT_TRUE(queue.push_session_text(s, message, std::nullopt));
+    ASSERT_TRUE(queue.push_keyframe(s, numbered_frame(4)));
+    EXPECT_TRUE(queue.push_session_text(s, message, 4));
+    EXPECT_FALSE(queue.push_session_text(s, message, 5));
+    EXPECT_EQ(queue.push_delta(s, numbered_frame(5)), OutputQueue::DeltaOutcome::queued);
+    EXPECT_TRUE(queue.push_session_text(s, message, 5));
+    // Over budget the stream stalls: messages wait for the catch-up keyframe.
+    EXPECT_EQ(queue.push_delta(s, numbered_frame(6, 2000)),
+              OutputQueue::DeltaOutcome::dropped_stalled);
+    EXPECT_FALSE(queue.push_session_text(s, message, 6));
+    EXPECT_FALSE(queue.push_session_text(s, message, 5));
+    queue.forget(s, false);
+    EXPECT_FALSE(queue.push_session_text(s, message, std::nullopt));  // after `closed`
+}
+
+TEST(OutputQueue, session_bytes_count_the_frames_queued_for_a_session) {
+    OutputQueue queue(100000, {}, nullptr);
+    const protocol::SessionId a{{1}}, b{{2}};
+    queue.expect_keyframe(a);
+    queue.expect_keyframe(b);
+    ASSERT_TRUE(queue.push_keyframe(a, numbered_frame(0, 500)));
+    ASSERT_TRUE(queue.push_keyframe(b, numbered_frame(0, 300)));
+    EXPECT_EQ(queue.push_delta(a, numbered_frame(1, 200)), OutputQueue::DeltaOutcome::queued);
+    EXPECT_EQ(queue.session_bytes(a), 700u);
+    EXPECT_EQ(queue.session_bytes(b), 300u);
+    ASSERT_TRUE(queue.next());  // a's keyframe leaves the queue
+    queue.written();
+    EXPECT_EQ(queue.session_bytes(a), 200u);
+    queue.forget(a);
+    EXPECT_EQ(queue.session_bytes(a), 0u);
+}
+
+}  // namespace
+}  // namespace isomesh::server

@@ -3,6 +3,7 @@
 // (server/store/session_store.h), then what each adds.
 #include <gtest/gtest.h>
 
+#include <sqlite3.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -140,6 +141,49 @@ TEST_P(SessionStoreContract, owners_and_touch_name_records_by_id) {
     ASSERT_TRUE(store().touch(activity, "a").ok());
     EXPECT_EQ(store().claim(id_of(3), "a").value()->active_us, 333u);
     EXPECT_TRUE(store().ping().ok());
+}
+
+TEST_P(SessionStoreContract, finds_a_record_by_its_view_id_until_it_is_deleted) {
+    SessionRecord first = record(1, "a");
+    first.view = id_of(101);
+    ASSERT_EQ(store().save(first).value(), Status::ok);
+    ASSERT_EQ(store().save(record(2, "a")).value(), Status::ok);  // view id unknown
+    EXPECT_EQ(store().control_of(id_of(101)).value(), id_of(1));
+    EXPECT_FALSE(store().control_of(id_of(102)).value()) << "no record has this view id";
+    EXPECT_FALSE(store().control_of(protocol::SessionId{}).value()) << "unknown is not an id";
+    const auto claimed = store().claim(id_of(1), "b").value();
+    ASSERT_TRUE(claimed);
+    EXPECT_EQ(claimed->view, id_of(101));
+    EXPECT_EQ(store().claim(id_of(2), "b").value()->view, protocol::SessionId{});
+    ASSERT_EQ(store().remove(id_of(1), "b").value(), Status::ok);
+    EXPECT_FALSE(store().control_of(id_of(101)).value());
+}
+
+TEST(SqliteStore, a_database_made_before_view_ids_gets_the_column_and_keeps_its_records) {
+    TemporaryFile file;
+    {
+        sqlite3* db = nullptr;
+        ASSERT_EQ(sqlite3_open(file.path.c_str(), &db), SQLITE_OK);
+        const char* old_schema =
+            "CREATE TABLE sessions (id TEXT PRIMARY KEY, owner TEXT NOT NULL, version INTEGER NOT "
+            "NULL, definition TEXT NOT NULL, created_us INTEGER NOT NULL, active_us INTEGER NOT "
+            "NULL);"
+            "INSERT INTO sessions VALUES ('01010101010101010101010101010101', 'old', 3, '{}', 1, "
+            "2);";
+        ASSERT_EQ(sqlite3_exec(db, old_schema, nullptr, nullptr, nullptr), SQLITE_OK);
+        sqlite3_close(db);
+    }
+    auto store = SqliteStore::open(file.path.string());
+    ASSERT_TRUE(store.ok()) << store.error().message;
+    const auto records = store.value()->claim_all("new", 0).value();
+    ASSERT_EQ(records.size(), 1u);
+    EXPECT_EQ(records[0].id, id_of(1));
+    EXPECT_EQ(records[0].version, 3u);
+    EXPECT_EQ(records[0].view, protocol::SessionId{});
+    SessionRecord updated = records[0];
+    updated.view = id_of(7);
+    ASSERT_EQ(store.value()->save(updated).value(), Status::ok);
+    EXPECT_EQ(store.value()->control_of(id_of(7)).value(), id_of(1));
 }
 
 TEST(SqliteStore, claim_all_deletes_idle_records_and_takes_the_others) {

@@ -66,11 +66,13 @@ void TestConnection::receive(const Outgoing& message) {
         auto parsed = protocol::parse_server_message(*message.text);
         ASSERT_TRUE(parsed.ok()) << *message.text;
         messages.push_back(parsed.value());
+        received.emplace_back(parsed.value());
         return;
     }
     auto decoded = protocol::decode_frame(*message.frame);
     ASSERT_TRUE(decoded.ok()) << decoded.error().message;
     frames.push_back(decoded.value().header);
+    received.emplace_back(decoded.value().header);
     outcomes.push_back(replicas[decoded.value().header.session].apply(decoded.value()));
 }
 

@@ -57,6 +57,8 @@ class TestConnection {
     std::shared_ptr<Client> client;
     bool reading = true;
     std::vector<protocol::ServerMessage> messages;
+    /// Everything received, messages and frame headers, in the order it arrived.
+    std::vector<std::variant<protocol::ServerMessage, protocol::FrameHeader>> received;
     std::map<protocol::SessionId, protocol::MeshReplica> replicas;
     std::vector<protocol::FrameHeader> frames;  // headers of every frame received
     std::vector<protocol::MeshReplica::Outcome> outcomes;

@@ -384,6 +384,10 @@ export class IsomeshClient extends Emitter {
       this.sessions.set(reply.session, session);
     }
     session._setState(sessionState(reply), startedAt);
+    // The read-only id to share with viewers (holders of the control id only), and what the id
+    // this connection holds allows: 'control' or 'view' (PROTOCOL.md 3.2).
+    session.view = reply.view;
+    session.access = reply.access ?? 'control';
     return session;
   }
 
@@ -631,6 +635,10 @@ export class Session extends Emitter {
       case 'converged':
         this.lastConverged = message;
         this.emit('converged', message);
+        break;
+      case 'updated': // without an id: a version another controller made (PROTOCOL.md 2.2)
+        this.state = sessionState(message);
+        this.emit('state', this.state);
         break;
       case 'closed':
         this.closed = true;

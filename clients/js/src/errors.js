@@ -37,4 +37,7 @@ export const ERROR_CODES = Object.freeze([
   'bad_frame',
   'store_unavailable',
   'wrong_route',
+  'read_only',
+  'server_busy',
+  'resource_limit',
 ]);

@@ -68,10 +68,40 @@ test('schemas reject malformed messages', () => {
     ['update.json', { v: 1, type: 'update', session }],
     ['subscribe.json', { v: 1, type: 'subscribe', session: 'xyz' }],
     ['subscribe.json', { v: 1, type: 'subscribe', session, more: true }],
-    ['error.json', { v: 1, type: 'error', code: 'no_such_code', message: 'm' }],
+    ['error.json', { v: 1, type: 'error', code: 'Not A Code', message: 'm' }],
+    ['error.json', { v: 1, type: 'error', code: 'internal' }],
+    ['created.json', { ...samples.created, access: 'admin' }],
+    ['ping.json', { v: 1, type: 'ping', id: '😀'.repeat(65) }],
     ['client-message.json', { v: 1, type: 'created', session }],
   ];
   for (const [schema, message] of invalid) {
     assert.equal(validator(schema)(message), false, `${schema} accepted ${JSON.stringify(message)}`);
   }
+});
+
+test('server-message schemas allow what PROTOCOL.md 9 allows: new fields, codes and reasons', () => {
+  const extended = [
+    ['created.json', { ...samples.created, new_field: { any: 1 } }],
+    ['pong.json', { ...samples.pong, new_field: 1 }],
+    ['progress.json', { ...samples.progress, certified: true }],
+    ['converged.json', { ...samples.converged, certified: true }],
+    ['error.json', { v: 1, type: 'error', code: 'from_the_future', message: 'm', hint: 'h' }],
+    ['closed.json', { v: 1, type: 'closed', session: samples.closed.session, reason: 'migrated' }],
+    ['ack.json', { ...samples.ack, extra: [1] }],
+  ];
+  for (const [schema, message] of extended) {
+    const validate = validator(schema);
+    assert.ok(validate(message), `${schema}: ${ajv.errorsText(validate.errors)}`);
+    assert.ok(validator('server-message.json')(message), `${schema} in the union`);
+  }
+});
+
+test('string limits count characters (code points), as maxLength does and as the server does', () => {
+  // 64 four-byte characters: 256 bytes of UTF-8, 128 UTF-16 units, 64 characters.
+  const id = '😀'.repeat(64);
+  assert.ok(validator('ping.json')({ v: 1, type: 'ping', id }));
+  const echoed = JSON.parse(execFileSync(tool, ['echo-id', JSON.stringify(id)], { encoding: 'utf8' }));
+  assert.deepEqual(echoed, { accepted: true });
+  const tooLong = JSON.parse(execFileSync(tool, ['echo-id', JSON.stringify(id + 'x')], { encoding: 'utf8' }));
+  assert.deepEqual(tooLong, { accepted: false });
 });

@@ -146,6 +146,11 @@ class Redis {
     return stdout.trim();
   }
 
+  /** The number of session records (each also has a key for its view id). */
+  async records() {
+    return Number(await this.cli('eval', "return #redis.call('keys', 'isomesh:session:*')", '0'));
+  }
+
   remove() {
     rmSync(this.dir, { recursive: true, force: true });
   }
@@ -180,7 +185,7 @@ class Cluster {
     const name = this.names[i];
     const [program, ...args] = hostCommand(this.services[name]);
     if (program !== 'isomesh-server' || args.length > 0) throw new Error(`unexpected command of ${name}: ${program} ${args}`);
-    this.servers[i] = await startServer([], { bare: true, env: { ...process.env, ...this.serverEnvironment(name) } });
+    this.servers[i] = await startServer([], { bare: true, env: this.serverEnvironment(name) });
     return this.servers[i];
   }
 

@@ -36,7 +36,7 @@ const SURFACES = [
  * The definition of session j after `step` updates. Every update moves the slider and the box:
  * a new box makes the server mesh from scratch, so the converged mesh depends on the definition
  * alone, not on when the updates came (parameter-only updates refine from the mesh on hand,
- * PROTOCOL.md 3.5), and every session can be checked against a reference server.
+ * PROTOCOL.md 3.6), and every session can be checked against a reference server.
  */
 function definition(j, step = 0) {
   const { expression, a } = SURFACES[j % SURFACES.length];
@@ -154,7 +154,8 @@ describe('cluster: Redis, three servers and HAProxy from deploy/', () => {
       await allConverged(sessions, 'first meshes');
       assert.deepEqual(await mismatches(sessions, references, definitions), [], 'meshes before any failure');
       assert.equal(await total(running(cluster), 'isomesh_sessions'), sessions.length);
-      assert.equal(Number(await cluster.redis.cli('dbsize')), sessions.length, 'one record per session');
+      assert.equal(await cluster.redis.records(), sessions.length, 'one record per session');
+      assert.equal(Number(await cluster.redis.cli('dbsize')), 2 * (sessions.length), 'and one view key each');
 
       // ---- kill -9 of the busiest server --------------------------------------------------
       const victim = await busiest(cluster);
@@ -204,7 +205,8 @@ describe('cluster: Redis, three servers and HAProxy from deploy/', () => {
       }
       assert.deepEqual(await mismatches(sessions, references, finals), [], 'meshes after updates and kill -9');
       assert.equal(await total(running(cluster), 'isomesh_sessions'), sessions.length, 'no session lost or duplicated');
-      assert.equal(Number(await cluster.redis.cli('dbsize')), sessions.length);
+      assert.equal(await cluster.redis.records(), sessions.length);
+      assert.equal(Number(await cluster.redis.cli('dbsize')), 2 * (sessions.length), 'and one view key each');
       assert.deepEqual(closedEvents, []);
 
       // ---- graceful: SIGTERM drains a server; its sessions move ----------------------------
@@ -265,7 +267,8 @@ describe('cluster: Redis stopped and restarted mid-run', () => {
       assert.equal(updated.version, 2);
       const created = await clients[0].create(definition(7));
       await allConverged([...sessions, created], 'after Redis came back');
-      assert.equal(Number(await cluster.redis.cli('dbsize')), sessions.length + 1);
+      assert.equal(await cluster.redis.records(), sessions.length + 1);
+      assert.equal(Number(await cluster.redis.cli('dbsize')), 2 * (sessions.length + 1), 'and one view key each');
       // A new connection through HAProxy reaches a session's server by its route.
       const late = await decoder().then((d) => connect(cluster.wsUrl, { decoder: d, WebSocket, route: sessions[2].id.slice(0, 8) }));
       clients.push(late);

@@ -1,7 +1,7 @@
 // Sessions that survive a crash: isomesh-server with its SQLite session store, killed with
 // SIGKILL (no drain, nothing flushed) and started again on the same file and port. Every session
-// comes back and converges to the identical mesh (the same triangles at bit-equal positions);
-// closed and expired sessions do not come back.
+// comes back and converges to the identical mesh (the same triangles at bit-equal positions) and
+// answers to its view id, read-only; closed and expired sessions do not come back.
 //
 //   cd tests/server/node && npm ci --no-audit --no-fund && node --test durability.test.js
 
@@ -46,7 +46,7 @@ describe('SQLite session store', () => {
       await sessions[1].update({ box: [-2.5, 2.5, -2.5, 2.5, -2.5, 2.5] });
       await sessions[3].update({ parameters: { b: 6 } });
       await Promise.all(sessions.map((s) => converged(s)));
-      const before = sessions.map((s) => ({ id: s.id, state: s.state, mesh: positionTriangles(s.mesh) }));
+      const before = sessions.map((s) => ({ id: s.id, view: s.view, state: s.state, mesh: positionTriangles(s.mesh) }));
 
       const closer = await keeper.create({ expression: 'x^2+y^2+z^2=4', box: BOX, constraints: { triangles: 500 } });
       await closer.close();
@@ -79,6 +79,14 @@ describe('SQLite session store', () => {
             assert.deepEqual(positionTriangles(sessions[i].mesh), mesh, `session ${i} (resubscribed)`);
           }
         }
+        // The view id survives too, and is still read-only.
+        assert.ok(before[0].view && before[0].view !== before[0].id);
+        const viewed = await viewer.subscribe(before[0].view);
+        assert.equal(viewed.access, 'view');
+        assert.equal(viewed.view, undefined, 'a holder of the view id never learns the control id');
+        await convergedAt(viewed, before[0].state.version);
+        assert.deepEqual(positionTriangles(viewed.mesh), before[0].mesh, 'identical mesh by the view id');
+        await assert.rejects(viewed.pause(), (e) => e.code === 'read_only');
         // The parameter-updated session converges to the mesh of its definition made afresh.
         const fresh = await viewer.create({ ...DEFINITIONS[3], parameters: { b: 6 } });
         await converged(fresh);

@@ -152,12 +152,14 @@ describe('resources', () => {
       const [driver, reader] = await Promise.all([client(server), client(server)]);
       try {
         // Two sessions whose every version moves every vertex, so that each re-sends its whole
-        // mesh: more bytes in 5 s than the kernel's socket buffers hold. The driver only moves the
-        // sliders (it unsubscribes, so decoding frames does not slow its updates down), and the
+        // mesh: more bytes in 5 s than the kernel's socket buffers hold (200,000 triangles each:
+        // a version superseded while its vertices move sends no half-moved frame, and with
+        // 100,000 too few bytes left on a busy machine). The driver only moves the sliders (it
+        // unsubscribes, so decoding frames does not slow its updates down), and the
         // reader stops reading right after subscribing, before its receive buffer has grown (on
         // loopback Linux grows it up to tcp_rmem's maximum, 32 MB here, for a reader that keeps up).
         const sessions = await Promise.all([4, 5].map((a) =>
-          driver.create({ expression: 'x^2+y^2+z^2=a', parameters: { a }, box: BOX, constraints: { triangles: 100000 } })));
+          driver.create({ expression: 'x^2+y^2+z^2=a', parameters: { a }, box: BOX, constraints: { triangles: 200000 } })));
         await Promise.all(sessions.map((s) => converged(s)));
         await Promise.all(sessions.map((s) => s.unsubscribe()));
         const before = server.status().rssKb;
@@ -253,13 +255,20 @@ describe('bad input', () => {
       }
       assert.equal((await raw.reply(4)).column, 11); // the '=' inside the bracket
 
-      // Too large to be parsed at all: the reply cannot echo the id.
+      // Too large, or nested too deeply, to be parsed: the reply still echoes the id.
       raw.send({ v: 1, type: 'ping', id: 5, pad: 'x'.repeat(5000) });
-      await until(() => raw.messages.some((m) => m.type === 'error' && m.code === 'too_large'));
+      assert.equal((await raw.reply(5)).code, 'too_large');
+      raw.send(`{"v":1,"type":"ping","id":13,"x":${'['.repeat(40)}${']'.repeat(40)}}`);
+      assert.equal((await raw.reply(13)).code, 'bad_json');
+      // Names the function does not use are typos, not silently dropped.
+      create(14, { expression: 'x^2+y^2+z^2=4', parameters: { b: 1 } });
+      const typo = await raw.reply(14);
+      assert.equal(typo.code, 'bad_field');
+      assert.match(typo.message, /'b'/);
 
       raw.send('{not json');
       raw.socket.send(Buffer.from([1, 2, 3]), { binary: true }); // clients send no binary messages
-      await until(() => raw.messages.filter((m) => m.type === 'error' && m.code === 'bad_json').length === 2);
+      await until(() => raw.messages.filter((m) => m.type === 'error' && m.code === 'bad_json' && m.id === undefined).length === 2);
 
       create(10, { expression: 'x^2+y^2+z^2=1', constraints: { triangles: 100 } });
       assert.equal((await raw.reply(10)).type, 'created');
