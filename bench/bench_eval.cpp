@@ -11,6 +11,16 @@
 // - tape/<model> reports ratio_vs_native = tape time / native time (the goal: below 2).
 // - tiled/prospero evaluates the same grid in 64 x 64 tiles, each inside push(tile)/pop(), with
 //   tape simplification on and off: speedup_vs_unsimplified is the gain from simplification.
+// - per_instruction/<model>/<kind>: the cost of one evaluation of each kind (value, value_gradient,
+//   interval, interval_gradient; single and batched by 8 as the octree batches a cell's children)
+//   per tape instruction, at points and on boxes spread over the model's box (boxes 1/32 of it
+//   across, an octree cell at depth 5), with the kernels (ns_per_instruction) and with the
+//   reference evaluation (TapeFieldOptions::reference: the evaluator before the kernels, one
+//   instruction at a time, same results bit for bit): speedup_vs_reference. For single values,
+//   ratio_vs_native compares with the native function called on one point.
+// - octree_step/<model>: what the octree does per cell: interval_gradients of a cell's 8 children,
+//   then push(child)/pop() for each (tape simplification from the choices just recorded), per
+//   child, kernels against the reference.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -18,6 +28,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -31,6 +42,8 @@
 // Generated from the .vm files at build time.
 void native_bear(const double* x, const double* y, const double* z, double* out, std::size_t n);
 void native_prospero(const double* x, const double* y, const double* z, double* out, std::size_t n);
+void native_colonnade(const double* x, const double* y, const double* z, double* out,
+                      std::size_t n);
 
 namespace isomesh {
 namespace {
@@ -66,14 +79,16 @@ struct Model {
     const char* name;
     std::string source;  // an expression, or @file.vm
     NativeBatch native;
+    double scale = 1.0;  // the model's box is [-scale, scale]^3
 };
 
 const std::vector<Model>& models() {
     static const std::vector<Model> all = {
         {"sphere", "x^2+y^2+z^2-1", native_sphere},
-        {"thesis", "sqrt(x^2+y^2+z^2)+2cos(2x)+2cos(2y)+2cos(2z)-20", native_thesis},
-        {"tanglecube", "@tanglecube.vm", native_tanglecube},
+        {"thesis", "sqrt(x^2+y^2+z^2)+2cos(2x)+2cos(2y)+2cos(2z)-20", native_thesis, 28.0},
+        {"tanglecube", "@tanglecube.vm", native_tanglecube, 3.0},
         {"bear", "@bear.vm", native_bear},
+        {"colonnade", "@colonnade.vm", native_colonnade},
         {"prospero", "@prospero.vm", native_prospero},
     };
     return all;
@@ -248,6 +263,198 @@ void BM_tiled(benchmark::State& state, const char* name) {
     }
 }
 
+/// Points and boxes spread over a model's box by a fixed generator, for per_instruction.
+struct Samples {
+    std::vector<double> x, y, z;
+    std::vector<Box> boxes;
+};
+
+constexpr std::size_t kSamples = 1024;
+
+Samples samples(const Model& m) {
+    Samples s;
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u(-m.scale, m.scale);
+    const double cell = 2.0 * m.scale / 32;
+    for (std::size_t i = 0; i < kSamples; ++i) {
+        const glm::dvec3 p(u(rng), u(rng), u(rng));
+        s.x.push_back(p.x), s.y.push_back(p.y), s.z.push_back(p.z);
+        s.boxes.push_back({p, p + cell});
+    }
+    return s;
+}
+
+enum class Kind {
+    Value,
+    Values8,
+    ValueGradient,
+    ValueGradients8,
+    Interval,
+    Intervals8,
+    IntervalGradient,
+    IntervalGradients8,
+};
+
+const char* kind_name(Kind k) {
+    switch (k) {
+        case Kind::Value:
+            return "value";
+        case Kind::Values8:
+            return "values_by_8";
+        case Kind::ValueGradient:
+            return "value_gradient";
+        case Kind::ValueGradients8:
+            return "value_gradients_by_8";
+        case Kind::Interval:
+            return "interval";
+        case Kind::Intervals8:
+            return "intervals_by_8";
+        case Kind::IntervalGradient:
+            return "interval_gradient";
+        case Kind::IntervalGradients8:
+            return "interval_gradients_by_8";
+    }
+    return "";
+}
+
+/// Evaluates every sample once in the way `kind` says; returns a checksum.
+double evaluate_samples(Evaluator& e, const Samples& s, Kind kind) {
+    double sum = 0.0;
+    std::vector<double> values(8);
+    std::vector<ValueGradient> gradients(8);
+    std::vector<IntervalValue> intervals(8);
+    std::vector<IntervalGradient> interval_gradients(8);
+    auto batch = [&](std::size_t i) {
+        return PointBatch{{s.x.data() + i, 8}, {s.y.data() + i, 8}, {s.z.data() + i, 8}};
+    };
+    for (std::size_t i = 0; i < kSamples; i += 8) {
+        switch (kind) {
+            case Kind::Value:
+                for (std::size_t j = i; j < i + 8; ++j) sum += e.value({s.x[j], s.y[j], s.z[j]});
+                break;
+            case Kind::Values8:
+                e.values(batch(i), values);
+                sum += values[0];
+                break;
+            case Kind::ValueGradient:
+                for (std::size_t j = i; j < i + 8; ++j)
+                    sum += e.value_gradient({s.x[j], s.y[j], s.z[j]}).gradient.x;
+                break;
+            case Kind::ValueGradients8:
+                e.value_gradients(batch(i), gradients);
+                sum += gradients[0].gradient.x;
+                break;
+            case Kind::Interval:
+                for (std::size_t j = i; j < i + 8; ++j) sum += e.interval(s.boxes[j]).value.lo;
+                break;
+            case Kind::Intervals8:
+                e.intervals({s.boxes.data() + i, 8}, intervals);
+                sum += intervals[0].value.lo;
+                break;
+            case Kind::IntervalGradient:
+                for (std::size_t j = i; j < i + 8; ++j)
+                    sum += e.interval_gradient(s.boxes[j]).gradient[0].lo;
+                break;
+            case Kind::IntervalGradients8:
+                e.interval_gradients({s.boxes.data() + i, 8}, interval_gradients);
+                sum += interval_gradients[0].gradient[0].lo;
+                break;
+        }
+    }
+    return sum;
+}
+
+/// Mean seconds of `evaluate` over a few runs after a warm-up, for the baselines.
+template <class F>
+double seconds_of(const F& evaluate) {
+    evaluate();
+    const int runs = 3;
+    double start = thread_seconds();
+    for (int r = 0; r < runs; ++r) evaluate();
+    return (thread_seconds() - start) / runs;
+}
+
+void BM_per_instruction(benchmark::State& state, const char* name, Kind kind) {
+    const Model& m = model(name);
+    auto tape = compile(m.source);
+    auto kernels = make_tape_field(tape, {}, {.simplify = false})->make_evaluator();
+    auto reference =
+        make_tape_field(tape, {}, {.simplify = false, .reference = true})->make_evaluator();
+    const Samples s = samples(m);
+    double total = 0.0;
+    for (auto _ : state) {
+        double start = thread_seconds();
+        benchmark::DoNotOptimize(evaluate_samples(*kernels, s, kind));
+        double seconds = thread_seconds() - start;
+        state.SetIterationTime(seconds);
+        total += seconds;
+    }
+    const double instructions = static_cast<double>(active_tape_size(*kernels));
+    const double per_eval = total / static_cast<double>(state.iterations() * kSamples);
+    const double reference_per_eval =
+        seconds_of([&] { benchmark::DoNotOptimize(evaluate_samples(*reference, s, kind)); }) /
+        kSamples;
+    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * kSamples));
+    state.counters["instructions"] = instructions;
+    state.counters["ns_per_instruction"] = 1e9 * per_eval / instructions;
+    state.counters["reference_ns_per_instruction"] = 1e9 * reference_per_eval / instructions;
+    state.counters["speedup_vs_reference"] = reference_per_eval / per_eval;
+    if (kind == Kind::Value) {
+        std::vector<double> out(1);
+        const double native_per_eval = seconds_of([&] {
+                                           for (std::size_t i = 0; i < kSamples; ++i)
+                                               m.native(&s.x[i], &s.y[i], &s.z[i], out.data(), 1);
+                                           benchmark::DoNotOptimize(out.data());
+                                       }) /
+                                       kSamples;
+        state.counters["ratio_vs_native"] = per_eval / native_per_eval;
+    }
+}
+
+/// Per child of a cell: interval_gradients of the 8 children, then push(child)/pop() of each.
+double octree_steps(Evaluator& e, const Samples& s) {
+    std::vector<IntervalGradient> out(8);
+    double sum = 0.0;
+    for (std::size_t i = 0; i < kSamples; i += 8) {
+        const Box& parent = s.boxes[i];
+        std::vector<Box> children(8);
+        const glm::dvec3 half = 0.5 * parent.size();
+        for (int c = 0; c < 8; ++c) {
+            glm::dvec3 lo = parent.lo + glm::dvec3(c & 1, (c >> 1) & 1, (c >> 2) & 1) * half;
+            children[c] = {lo, lo + half};
+        }
+        e.interval_gradients(children, out);
+        for (const Box& child : children) {
+            e.push(child);
+            sum += static_cast<double>(active_tape_size(e));
+            e.pop();
+        }
+    }
+    return sum;
+}
+
+void BM_octree_step(benchmark::State& state, const char* name) {
+    const Model& m = model(name);
+    auto tape = compile(m.source);
+    auto kernels = make_tape_field(tape, {})->make_evaluator();
+    auto reference = make_tape_field(tape, {}, {.reference = true})->make_evaluator();
+    const Samples s = samples(m);
+    double total = 0.0;
+    for (auto _ : state) {
+        double start = thread_seconds();
+        benchmark::DoNotOptimize(octree_steps(*kernels, s));
+        double seconds = thread_seconds() - start;
+        state.SetIterationTime(seconds);
+        total += seconds;
+    }
+    const double per_child = total / static_cast<double>(state.iterations() * kSamples);
+    const double reference_per_child =
+        seconds_of([&] { benchmark::DoNotOptimize(octree_steps(*reference, s)); }) / kSamples;
+    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * kSamples));
+    state.counters["us_per_child"] = 1e6 * per_child;
+    state.counters["speedup_vs_reference"] = reference_per_child / per_child;
+}
+
 void register_benchmarks() {
     for (const Model& m : models()) {
         benchmark::RegisterBenchmark((std::string("native/") + m.name).c_str(), BM_native, m.name)
@@ -256,6 +463,23 @@ void register_benchmarks() {
         benchmark::RegisterBenchmark((std::string("tape/") + m.name).c_str(), BM_tape, m.name)
             ->UseManualTime()
             ->Unit(benchmark::kMillisecond);
+    }
+    for (const char* name : {"bear", "colonnade", "thesis", "tanglecube", "prospero"}) {
+        for (Kind kind :
+             {Kind::Value, Kind::Values8, Kind::ValueGradient, Kind::ValueGradients8,
+              Kind::Interval, Kind::Intervals8, Kind::IntervalGradient, Kind::IntervalGradients8}) {
+            benchmark::RegisterBenchmark(
+                (std::string("per_instruction/") + name + "/" + kind_name(kind)).c_str(),
+                BM_per_instruction, name, kind)
+                ->UseManualTime()
+                ->MinTime(0.2)
+                ->Unit(benchmark::kMicrosecond);
+        }
+        benchmark::RegisterBenchmark((std::string("octree_step/") + name).c_str(), BM_octree_step,
+                                     name)
+            ->UseManualTime()
+            ->MinTime(0.2)
+            ->Unit(benchmark::kMicrosecond);
     }
     benchmark::RegisterBenchmark("tiled/prospero", BM_tiled, "prospero")
         ->ArgName("simplify")

@@ -46,4 +46,8 @@ struct BatchStep {
 void run_batch_steps(std::span<const BatchStep> steps, const double* const* read,
                      double* const* write, std::size_t n);
 
+/// run_batch_steps for a single point, with the same operations of op_math.h (bit-identical
+/// values): registers[r] is register r; registers 0-2 hold x, y and z.
+void run_point_steps(std::span<const BatchStep> steps, double* registers);
+
 }  // namespace isomesh

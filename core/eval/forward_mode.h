@@ -154,6 +154,32 @@ struct Tangent {
     T grad[3];
 };
 
+/// out = the tangent of one unary or binary instruction `op` (immediate `imm`) from its operands'
+/// (b is ignored for a unary operation). Written in place: `out` must not be a or b.
+template <class T>
+[[gnu::always_inline]] inline void step(Tangent<T>& out, Op op, double imm, const Tangent<T>& a,
+                                        const Tangent<T>& b) {
+    if (is_unary(op)) {
+        out.value = unary(op, a.value, imm);
+        T partial = unary_partial(op, a.value, out.value, imm);
+        for (int k = 0; k < 3; ++k) out.grad[k] = term(partial, a.grad[k]);
+        return;
+    }
+    out.value = binary(op, a.value, b.value);
+    if (op == Op::Min || op == Op::Max) {
+        Pick p = pick(op, a.value, b.value);
+        for (int k = 0; k < 3; ++k) {
+            out.grad[k] = p == Pick::A   ? a.grad[k]
+                          : p == Pick::B ? b.grad[k]
+                                         : either(a.grad[k], b.grad[k]);
+        }
+        return;
+    }
+    Partials<T> partial = binary_partials(op, a.value, b.value, out.value);
+    for (int k = 0; k < 3; ++k)
+        out.grad[k] = binary(Op::Add, term(partial.da, a.grad[k]), term(partial.db, b.grad[k]));
+}
+
 /// Runs `code` in forward mode and returns the tangent of its last instruction. `leaf(ins)` gives
 /// the value of a leaf instruction (constants and variables; parameters are bound to constants).
 /// `slots` is scratch memory, resized as needed.
@@ -173,28 +199,7 @@ Tangent<T> differentiate(std::span<const Instruction> code, std::vector<Tangent<
                 out.grad[static_cast<int>(ins.op) - 1] = one;
             continue;
         }
-        const Tangent<T>& a = slots[ins.a];
-        if (is_unary(ins.op)) {
-            out.value = unary(ins.op, a.value, ins.imm);
-            T partial = unary_partial(ins.op, a.value, out.value, ins.imm);
-            for (int k = 0; k < 3; ++k) out.grad[k] = term(partial, a.grad[k]);
-            continue;
-        }
-        const Tangent<T>& b = slots[ins.b];
-        out.value = binary(ins.op, a.value, b.value);
-        if (ins.op == Op::Min || ins.op == Op::Max) {
-            Pick p = pick(ins.op, a.value, b.value);
-            for (int k = 0; k < 3; ++k) {
-                out.grad[k] = p == Pick::A   ? a.grad[k]
-                              : p == Pick::B ? b.grad[k]
-                                             : either(a.grad[k], b.grad[k]);
-            }
-            continue;
-        }
-        Partials<T> partial = binary_partials(ins.op, a.value, b.value, out.value);
-        for (int k = 0; k < 3; ++k) {
-            out.grad[k] = binary(Op::Add, term(partial.da, a.grad[k]), term(partial.db, b.grad[k]));
-        }
+        step(out, ins.op, ins.imm, slots[ins.a], slots[is_binary(ins.op) ? ins.b : ins.a]);
     }
     return slots[code.size() - 1];
 }

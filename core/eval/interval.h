@@ -3,6 +3,8 @@
 // constructive solid geometry", SIGGRAPH 1992).
 #pragma once
 
+#include <limits>
+
 namespace isomesh {
 
 /// A closed interval [lo, hi]; lo may be -inf and hi +inf. An empty interval (the function is
@@ -11,8 +13,12 @@ struct Interval {
     double lo = 0.0;
     double hi = 0.0;
 
-    static Interval empty();
-    static Interval entire();
+    static constexpr Interval empty() {
+        return {std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+    }
+    static constexpr Interval entire() {
+        return {-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+    }
     bool is_empty() const { return !(lo <= hi); }
     bool contains(double v) const { return lo <= v && v <= hi; }
     /// True when every value is > 0, or every value is < 0: f has no root in the box.

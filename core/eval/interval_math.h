@@ -14,13 +14,19 @@
 // endpoints possibly infinite; an infinite endpoint means the operand may take that infinity.
 #pragma once
 
+#include <algorithm>
+
 #include "eval/interval.h"
 #include "tape/tape.h"
 
 namespace isomesh {
 
 /// The smallest interval containing a and b (either may be empty).
-Interval hull(const Interval& a, const Interval& b);
+inline Interval hull(const Interval& a, const Interval& b) {
+    if (a.is_empty()) return b;
+    if (b.is_empty()) return a;
+    return {std::min(a.lo, b.lo), std::max(a.hi, b.hi)};
+}
 
 /// [value, value]; empty (and undefined) for NaN.
 IntervalValue interval_constant(double value);

@@ -16,6 +16,10 @@ struct TapeFieldOptions {
     /// Evaluator::push(box) specialises the tape to the box (min/max branches proven irrelevant
     /// are dropped). When false, push and pop do nothing.
     bool simplify = true;
+    /// Evaluate with the reference evaluation (reference_evaluation.h: the generic arithmetic, one
+    /// instruction at a time) instead of the kernels: the same results, bit for bit, slower. For
+    /// the tests and benchmarks that compare the two.
+    bool reference = false;
 };
 
 /// The field f(x, y, z) computed by `tape` with parameter i bound to params[i]. Cheap to call
@@ -32,5 +36,15 @@ std::shared_ptr<const Field> make_tape_field(std::shared_ptr<const Tape> tape,
 /// push() that simplified it. 0 when `evaluator` does not come from make_tape_field. For tests and
 /// benchmarks.
 std::size_t active_tape_size(const Evaluator& evaluator);
+
+/// How many box-steps (one instruction on one box) `evaluator`'s interval kernels have run, and
+/// how many of them the reference code recomputed (where an enclosure is not finite: poles,
+/// infinite boxes, divisors holding 0; see interval_kernels.h). Zeros when `evaluator` does not
+/// come from make_tape_field. For tests and benchmarks.
+struct IntervalKernelCounts {
+    std::size_t steps = 0;
+    std::size_t by_reference = 0;
+};
+IntervalKernelCounts interval_kernel_counts(const Evaluator& evaluator);
 
 }  // namespace isomesh

@@ -20,4 +20,17 @@ constexpr bool is_binary(Op op) {
     return op >= Op::Add;
 }
 
+// Every unary and binary operation, for the evaluators' switches over operations: X(name) per
+// operation.
+#define ISOMESH_UNARY_OPS(X)                                                                \
+    X(Neg)                                                                                  \
+    X(Square)                                                                               \
+    X(PowInt) X(Sqrt) X(Cbrt) X(Abs) X(Sgn) X(Floor) X(Ceil) X(Round) X(Exp) X(Ln) X(Log10) \
+        X(Log2) X(Sin) X(Cos) X(Tan) X(Asin) X(Acos) X(Atan) X(Sinh) X(Cosh) X(Tanh)
+#define ISOMESH_BINARY_OPS(X) X(Add) X(Sub) X(Mul) X(Div) X(Pow) X(Atan2) X(Min) X(Max)
+#define ISOMESH_COUNT(name) +1
+static_assert(5 ISOMESH_UNARY_OPS(ISOMESH_COUNT) ISOMESH_BINARY_OPS(ISOMESH_COUNT) == kOpCount,
+              "the lists must name every operation");
+#undef ISOMESH_COUNT
+
 }  // namespace isomesh

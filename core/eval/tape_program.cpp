@@ -6,6 +6,7 @@
 #include "eval/tape_program.h"
 
 #include <cassert>
+#include <cmath>
 #include <limits>
 
 #include "eval/tape_ops.h"
@@ -75,6 +76,7 @@ TapeProgram make_program(std::vector<Instruction> code) {
     const std::size_t n = c.size();
     const std::size_t output = n - 1;
     std::vector<bool> live = live_slots(c);
+    program.steps.reserve(n);
 
     // Which values must sit in a register, and the last instruction reading each.
     std::vector<bool> in_register(n, false);
@@ -82,7 +84,8 @@ TapeProgram make_program(std::vector<Instruction> code) {
     for (std::size_t i = 0; i < n; ++i) {
         const Instruction& ins = c[i];
         if (!live[i] || is_leaf(ins.op)) continue;
-        if (ins.op == Op::Min || ins.op == Op::Max) ++program.choices;
+        if (ins.op == Op::Min || ins.op == Op::Max)
+            program.choice_slots.push_back(static_cast<std::uint32_t>(i));
         BatchForm form = form_of(c, ins);
         if (form != BatchForm::ImmediateA) in_register[ins.a] = true, last_use[ins.a] = i;
         if (is_binary(ins.op) && form != BatchForm::ImmediateB)
@@ -102,21 +105,32 @@ TapeProgram make_program(std::vector<Instruction> code) {
             }
             if (ins.op == Op::Const && !in_register[i]) continue;  // read as an immediate only
         }
-        BatchForm form = form_of(c, ins);
-        BatchStep step{ins.op, form, 0, 0, 0, ins.imm};
+        const BatchForm form = form_of(c, ins);
+        std::uint32_t a = 0, b = 0;
+        double imm = ins.imm;
         if (is_variable)
-            step.a = static_cast<std::uint32_t>(ins.op) - static_cast<std::uint32_t>(Op::VarX);
+            a = static_cast<std::uint32_t>(ins.op) - static_cast<std::uint32_t>(Op::VarX);
         if (!is_leaf(ins.op)) {
-            step.a = form == BatchForm::ImmediateA ? 0 : reg[ins.a];
-            step.b = is_binary(ins.op) && form != BatchForm::ImmediateB ? reg[ins.b] : 0;
-            if (form == BatchForm::ImmediateA) step.imm = c[ins.a].imm;
-            if (form == BatchForm::ImmediateB) step.imm = c[ins.b].imm;
+            a = form == BatchForm::ImmediateA ? 0 : reg[ins.a];
+            b = is_binary(ins.op) && form != BatchForm::ImmediateB ? reg[ins.b] : 0;
+            if (form == BatchForm::ImmediateA) imm = c[ins.a].imm;
+            if (form == BatchForm::ImmediateB) imm = c[ins.b].imm;
+            if (form != BatchForm::Registers && !std::isfinite(imm))
+                program.finite_immediates = false;
         }
         // The result gets its register before the operands' are released, so a step never
         // writes an array it reads (run_batch_steps' precondition).
-        step.out = i == output ? kOutputRegister : registers.allocate();
-        reg[i] = step.out;
-        program.steps.push_back(step);
+        const std::uint32_t out = i == output ? kOutputRegister : registers.allocate();
+        // Written field by field in place: a step assembled on the stack and then copied stalls
+        // on store forwarding, which dominated the cost of push().
+        BatchStep& step = program.steps.emplace_back();
+        step.op = ins.op;
+        step.form = form;
+        step.out = out;
+        step.a = a;
+        step.b = b;
+        step.imm = imm;
+        reg[i] = out;
         if (is_leaf(ins.op)) continue;
         if (form != BatchForm::ImmediateA && last_use[ins.a] == i) registers.release(reg[ins.a]);
         if (is_binary(ins.op) && form != BatchForm::ImmediateB && ins.b != ins.a &&

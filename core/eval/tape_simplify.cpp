@@ -1,45 +1,29 @@
 #include "eval/tape_simplify.h"
 
+#include <algorithm>
 #include <cassert>
-#include <cstdint>
 
-#include "eval/forward_mode.h"
 #include "eval/tape_ops.h"
 
 namespace isomesh {
 
-namespace {
-
-/// The operand a min or max at slot `i` always returns on the box, or -1.
-int proven_operand(const Instruction& ins, std::span<const IntervalValue> values) {
-    const IntervalValue& a = values[ins.a];
-    const IntervalValue& b = values[ins.b];
-    forward_mode::Pick pick = forward_mode::pick(ins.op, a, b);
-    if (pick == forward_mode::Pick::A && !b.maybe_undefined) return 0;
-    if (pick == forward_mode::Pick::B && !a.maybe_undefined) return 1;
-    return -1;
-}
-
-}  // namespace
-
-std::optional<std::vector<Instruction>> simplify_on_box(
-    std::span<const Instruction> code, std::span<const IntervalValue> slot_values) {
-    assert(!code.empty() && slot_values.size() == code.size());
+std::optional<std::vector<Instruction>> simplify_on_box(std::span<const Instruction> code,
+                                                        std::span<const std::uint32_t> choice_slots,
+                                                        std::span<const Choice> choices) {
+    assert(!code.empty() && choice_slots.size() == choices.size());
+    if (std::all_of(choices.begin(), choices.end(), [](Choice c) { return c == Choice::Both; }))
+        return std::nullopt;
     const std::size_t n = code.size();
     // forward[i]: the slot whose value slot i always equals on the box (itself, or the proven
-    // operand of a min or max, followed transitively).
+    // operand of a min or max, followed transitively: operands come before their uses).
     std::vector<std::uint32_t> forward(n);
-    bool changed = false;
-    for (std::size_t i = 0; i < n; ++i) {
-        const Instruction& ins = code[i];
-        forward[i] = static_cast<std::uint32_t>(i);
-        if (ins.op != Op::Min && ins.op != Op::Max) continue;
-        int operand = proven_operand(ins, slot_values);
-        if (operand < 0) continue;
-        forward[i] = forward[operand == 0 ? ins.a : ins.b];
-        changed = true;
+    for (std::size_t i = 0; i < n; ++i) forward[i] = static_cast<std::uint32_t>(i);
+    for (std::size_t c = 0; c < choices.size(); ++c) {
+        const std::uint32_t i = choice_slots[c];
+        assert(code[i].op == Op::Min || code[i].op == Op::Max);
+        if (choices[c] != Choice::Both)
+            forward[i] = forward[choices[c] == Choice::A ? code[i].a : code[i].b];
     }
-    if (!changed) return std::nullopt;
 
     std::vector<bool> live(n, false);
     live[forward[n - 1]] = true;

@@ -13,16 +13,22 @@
 // - above min_depth: split;
 // - otherwise cell_classification.h decides leaf, empty or split; a cell to split at max_depth is
 //   unresolved, unless it may hide a small feature: f continuous, every component of its
-//   gradient enclosure contains 0 (a critical point may lie inside) and its corners all on one
-//   side, so that a tiny closed component or a bubble could be there, unseen by Marching Cubes.
-//   Such a cell is split further, and its descendants too while they are not leaves, down to
-//   feature_depth. (Where the corners do change sign, Marching Cubes meshes what it sees: a
-//   gradient vanishing on the surface itself, as along a singular curve of f, gains nothing from
-//   deeper cells.)
+//   gradient enclosure contains 0, all its corners on one side, and the gradients at the corners
+//   all pointing away from the centre (outside: a minimum of f is likely inside) or towards it
+//   (inside: a maximum), so that a tiny closed component, a bubble, could be there unseen by
+//   Marching Cubes. Such a cell is split further, down to feature_depth, and in its subtree so
+//   are the cells meeting the same conditions and the cells the bubble's surface crosses (their
+//   corners change sign), until proven. (Where the corners of a cell at max_depth change sign,
+//   Marching Cubes meshes what it sees; where an enclosure merely fails to exclude a vanishing
+//   gradient, as on a CAD model's blends and creases or along a singular curve of f, deeper cells
+//   would find nothing.)
 #include "polygonize/octree.h"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
+
+#include <glm/geometric.hpp>
 
 namespace isomesh {
 namespace {
@@ -50,7 +56,7 @@ bool is_zero_region(const IntervalGradient& enclosure, double center_value) {
            is_exact_zero(enclosure.gradient[1]) && is_exact_zero(enclosure.gradient[2]);
 }
 
-/// f is smooth on the cell and its gradient may vanish somewhere in it.
+/// f is smooth on the cell and its gradient enclosure contains 0.
 bool may_hide_feature(const IntervalGradient& enclosure) {
     if (is_flagged(enclosure.value)) return false;
     return std::all_of(std::begin(enclosure.gradient), std::end(enclosure.gradient),
@@ -81,8 +87,8 @@ class CellClassifier {
             std::size_t end = done + 1;
             while (end < cells.size() && cells[end].parent() == cells[done].parent()) ++end;
             if (cells[done].depth > 0) walk_to(cells[done].parent());
-            const std::size_t classified = classify_siblings(
-                cells.subspan(done, end - done), out.subspan(done, end - done), budget);
+            const std::size_t classified = classify_siblings(cells.subspan(done, end - done),
+                                                             out.subspan(done, end - done), budget);
             done += classified;
             if (done < end) break;
         }
@@ -152,12 +158,14 @@ class CellClassifier {
                 break;
         }
         if (cell.depth < settings_.max_depth) return CellOutcome::Split;
-        if (cell.depth >= settings_.feature_depth || is_flagged(enclosure.value))
+        if (cell.depth >= settings_.feature_depth || !may_hide_feature(enclosure))
             return CellOutcome::Unresolved;
-        // Below max_depth lie only the subtrees of cells that may hide a feature.
-        if (cell.depth > settings_.max_depth) return CellOutcome::Split;
-        return may_hide_feature(enclosure) && corners_agree(cell) ? CellOutcome::Split
-                                                                  : CellOutcome::Unresolved;
+        // A component Marching Cubes would not see: all corners on one side and an extremum of f
+        // inside. Below max_depth, in the subtree of such a cell, also the cells its surface
+        // crosses, until they are proven.
+        const bool agree = corners_agree(cell);
+        if (!agree && cell.depth == settings_.max_depth) return CellOutcome::Unresolved;
+        return !agree || extremum_inside(cell) ? CellOutcome::Split : CellOutcome::Unresolved;
     }
 
     /// All corners of `cell` are on one side: Marching Cubes sees nothing there, so whatever
@@ -166,6 +174,31 @@ class CellClassifier {
         const bool inside = is_inside(corners_.value(lattice_.corner(cell, 0)));
         for (int c = 1; c < 8; ++c)
             if (is_inside(corners_.value(lattice_.corner(cell, c))) != inside) return false;
+        return true;
+    }
+
+    /// The gradient at every corner of `cell` points away from its centre (corners outside:
+    /// a minimum of f is likely inside, the centre of a bubble) or towards it (inside: a
+    /// maximum, a hollow). Where an interval enclosure of the gradient merely fails to exclude 0
+    /// (on a CAD model's blends and creases), the corners' gradients do not all point so, and
+    /// splitting deeper would find nothing.
+    bool extremum_inside(const CellId& cell) {
+        const Box box = lattice_.cell_box(cell);
+        const glm::dvec3 center = box.center();
+        std::array<double, 8> x, y, z;
+        for (int c = 0; c < 8; ++c) {
+            const glm::dvec3 p = lattice_.point(lattice_.corner(cell, c));
+            x[c] = p.x;
+            y[c] = p.y;
+            z[c] = p.z;
+        }
+        std::array<ValueGradient, 8> g;
+        evaluator_.value_gradients({x, y, z}, g);
+        const double side = is_inside(g[0].value) ? -1.0 : 1.0;
+        for (int c = 0; c < 8; ++c) {
+            const glm::dvec3 out = glm::dvec3(x[c], y[c], z[c]) - center;
+            if (!(side * glm::dot(g[c].gradient, out) > 0.0)) return false;
+        }
         return true;
     }
 
@@ -271,6 +304,7 @@ void Octree::advance(EvaluatorPool& pool, ValueMap& values, const WorkBudget& bu
 
 void Octree::apply(const CellId& cell, CellOutcome outcome) {
     ++counts_.classified;
+    counts_.at_max_depth += cell.depth == settings_.max_depth;
     counts_.depth = std::max(counts_.depth, cell.depth);
     switch (outcome) {
         case CellOutcome::Empty:
@@ -283,7 +317,8 @@ void Octree::apply(const CellId& cell, CellOutcome outcome) {
             ++counts_.leaves;
             return;
         case CellOutcome::Split:
-            if (pending_.size() + settled_.size() + 8 <= settings_.max_cells) {
+            if (pending_.size() + settled_.size() + 8 <= settings_.max_cells &&
+                feature_room(cell)) {
                 for (int octant = 0; octant < 8; ++octant)
                     pending_.insert(level_order_key(cell.child(octant)));
                 return;
@@ -295,6 +330,20 @@ void Octree::apply(const CellId& cell, CellOutcome outcome) {
             ++counts_.unresolved;
             return;
     }
+}
+
+bool Octree::feature_room(const CellId& cell) {
+    if (cell.depth < settings_.max_depth) {
+        return true;
+    }
+    // The search for features below max_depth may cost at most an eighth of the work above it
+    // (the cells classified at max_depth, counted in level order, so the same whatever the
+    // slicing): a model whose enclosures are loose everywhere must not spend its time there.
+    constexpr std::size_t kLeastFeatureCells = 4096;
+    const std::size_t allowed = std::max(kLeastFeatureCells, counts_.at_max_depth / 8);
+    if (feature_cells_ + 8 > allowed) return false;
+    feature_cells_ += 8;
+    return true;
 }
 
 void Octree::settle_pending() {

@@ -60,8 +60,11 @@ struct OctreeCounts {
     std::size_t regions = 0;
     /// Cells classified so far.
     std::size_t classified = 0;
-    /// Splits refused because the frontier was full (settings.max_cells).
+    /// Splits refused because the frontier was full (settings.max_cells), or because the search
+    /// for small features below max_depth had used its share (octree.cpp).
     std::size_t capped = 0;
+    /// Cells classified at max_depth.
+    std::size_t at_max_depth = 0;
     /// The deepest level reached.
     int depth = 0;
 };
@@ -98,12 +101,16 @@ class Octree {
 
   private:
     void apply(const CellId& cell, CellOutcome outcome);
+    /// Whether a cell to split may be: always above max_depth; below, while the search for small
+    /// features has room left.
+    bool feature_room(const CellId& cell);
 
     Lattice lattice_;
     OctreeSettings settings_;
     std::set<std::uint64_t> pending_;  // level_order_key: shallowest first, octree order
     std::vector<FrontierCell> settled_;
     OctreeCounts counts_;
+    std::size_t feature_cells_ = 0;  // cells made by splits at or below max_depth
 };
 
 /// Replaces settled cell `cell` (a leaf or an unresolved cell the mesh builder must split to match

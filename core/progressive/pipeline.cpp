@@ -269,8 +269,14 @@ void Pipeline::set_constraint(Constraint constraint) {
     // A budget below the phase-1 mesh's (simplified) triangles: simplify it again. (A higher one
     // is reached by refining from the roots as they are.)
     const std::optional<std::size_t> limit = settings_.refine.constraint.triangle_limit();
-    if (limit && installed_ && refiner_->root_topology().triangles > *limit)
+    if (limit && installed_ && refiner_->root_topology().triangles > *limit) {
         install(*installed_, WorkBudget{});
+        return;
+    }
+    // The roots fit the new budget (or there is none): whatever an earlier, lower budget could
+    // not reach no longer applies.
+    status_.budget_unreachable = false;
+    status_.minimum_triangles = 0;
 }
 
 void Pipeline::settle() {

@@ -51,6 +51,12 @@ bool Refiner::Impl::folds(std::uint32_t t, const glm::dvec3& m) const {
     return false;
 }
 
+void Refiner::Impl::block(std::uint32_t t) {
+    if (!split_queue_->contains(t)) return;
+    split_queue_->remove(t);
+    blocked_queue_->insert(t, triangles_[t].error);
+}
+
 bool Refiner::Impl::prepare(const SplitPlan& plan) {
     ensure_candidates(plan.chain);
     bool ok = true;
@@ -65,10 +71,7 @@ bool Refiner::Impl::prepare(const SplitPlan& plan) {
         if (!T.candidate_refused) continue;
         ok = false;
         ++counters_.refused_vertices;
-        if (split_queue_->contains(t)) {  // kept, unsplit, until the function changes
-            split_queue_->remove(t);
-            blocked_queue_->insert(t, triangles_[t].error);
-        }
+        block(t);  // kept, unsplit, until the function changes
     }
     return ok;
 }

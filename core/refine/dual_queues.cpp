@@ -38,15 +38,27 @@ bool Refiner::Impl::find_split(const MeshStats& stats, SplitPlan& plan) {
     SplitPlan smallest;
     smallest.added_triangles = has_boundary_ ? 1 : 2;
     if (!acceptable_split(stats, smallest)) return false;
-    // The common case: the top of the queue fits.
-    const std::uint32_t top = split_queue_->top();
+    // The common case: the top of the queue fits. A triangle whose forced splits meet one that
+    // cannot be split (no vertex for it, too small) cannot be split either: it leaves the queue
+    // (until the function changes), or every search would walk its chain again.
+    std::uint32_t top = split_queue_->top();
+    while (top != kNone && !plan_split(top, plan)) {
+        block(top);
+        top = split_queue_->top();
+    }
     if (top == kNone) return false;
-    if (plan_split(top, plan) && acceptable_split(stats, plan)) return true;
+    if (acceptable_split(stats, plan)) return true;
     bool found = false;
+    unplannable_.clear();
     split_queue_->visit_in_order([&](std::uint32_t t) {
-        found = plan_split(t, plan) && acceptable_split(stats, plan);
+        if (!plan_split(t, plan)) {
+            unplannable_.push_back(t);
+            return false;
+        }
+        found = acceptable_split(stats, plan);
         return found;
     });
+    for (std::uint32_t t : unplannable_) block(t);
     return found;
 }
 

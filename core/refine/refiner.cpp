@@ -133,6 +133,7 @@ void Refiner::Impl::load(const Mesh& input) {
     if (!problem.empty()) throw std::invalid_argument("Refiner: " + problem);
     Mesh mesh = input;
     build_adjacency(mesh);
+    reserve_for(mesh.triangles.size());
 
     std::vector<std::uint32_t> slot_of(mesh.positions.size(), kNone);
     for (const auto& tri : mesh.triangles)
@@ -216,6 +217,18 @@ std::vector<ValueGradient> Refiner::Impl::missing_gradients(const Mesh& mesh) {
     std::vector<ValueGradient> gradients(mesh.positions.size());
     evaluator_->value_gradients({x, y, z}, gradients);
     return gradients;
+}
+
+void Refiner::Impl::reserve_for(std::size_t root_triangles) {
+    // Growing the pools by doubling maps fresh pages twice over (a quarter of the time of a
+    // refinement from scratch went to page faults): make room for the budget at once, within
+    // reason (a bound far above what a mesh reaches does not reserve its memory).
+    constexpr std::size_t kMostReserved = 500'000;
+    const std::size_t leaves =
+        std::min(kMostReserved, std::max(root_triangles, constraint_.triangle_limit().value_or(0)));
+    triangles_.reserve(2 * leaves + root_triangles);
+    vertices_.reserve(leaves / 2 + 3);
+    records_.reserve(leaves / 2 + 1);
 }
 
 void Refiner::Impl::clear_all_into_delta() {

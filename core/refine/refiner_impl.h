@@ -80,6 +80,7 @@ class Pool {
         return static_cast<std::uint32_t>(items_.size() - 1);
     }
     void release(std::uint32_t slot) { free_.push_back(slot); }
+    void reserve(std::size_t n) { items_.reserve(n); }
     void clear() {
         items_.clear();
         free_.clear();
@@ -181,6 +182,8 @@ class Refiner::Impl {
   private:
     // --- structure
     void load(const Mesh& input);
+    /// Room in the pools for the refinement the constraint asks for.
+    void reserve_for(std::size_t root_triangles);
     /// grad f at the vertices of `mesh`, in one batch; empty when the mesh brought every norm
     /// and normal along.
     std::vector<ValueGradient> missing_gradients(const Mesh& mesh);
@@ -240,6 +243,8 @@ class Refiner::Impl {
     MeshStats stats_after_merge(const MeshStats& stats, std::uint32_t record);
     bool acceptable_split(const MeshStats& stats, const SplitPlan& plan) const;
     bool find_split(const MeshStats& stats, SplitPlan& plan);
+    /// Moves leaf t from the split queue to the blocked queue.
+    void block(std::uint32_t t);
     bool conflicts(const SplitPlan& plan, std::uint32_t record) const;
     std::size_t act();  // one split, merge or exchange; returns operations done, 0 when idle
     std::size_t try_exchange(const MeshStats& stats);
@@ -280,6 +285,7 @@ class Refiner::Impl {
     RefineCounters counters_;
     SplitPlan plan_;  // scratch
     std::vector<std::uint32_t> exchange_merges_;
+    std::vector<std::uint32_t> unplannable_;
     std::vector<std::uint32_t> stale_, pending_;
     std::vector<ProjectionRequest> requests_;
     std::vector<Projection> projections_;

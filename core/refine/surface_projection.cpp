@@ -240,12 +240,13 @@ Projection project_to_surface(Evaluator& evaluator, const ProjectionRequest& req
 void project_to_surface(Evaluator& evaluator, std::span<const ProjectionRequest> requests,
                         std::span<Projection> out, const ProjectionSettings& settings) {
     assert(requests.size() == out.size());
-    std::vector<SecantSearch> searches;
-    searches.reserve(requests.size());
+    // Scratch kept per thread: the refiner projects a few points at a time, very often.
+    thread_local std::vector<SecantSearch> searches;
+    thread_local std::vector<std::size_t> active;
+    thread_local std::vector<double> x, y, z, f;
+    searches.clear();
     for (const ProjectionRequest& r : requests) searches.emplace_back(r, settings);
     // Secant searches in lockstep: one batched evaluation per round.
-    std::vector<std::size_t> active;
-    std::vector<double> x, y, z, f;
     for (;;) {
         active.clear();
         x.clear();

@@ -274,6 +274,57 @@ TEST_P(EvaluatorConformance, push_keeps_results_inside_box) {
     });
 }
 
+bool same_interval(const Interval& a, const Interval& b) {
+    return same_value(a.lo, b.lo) && same_value(a.hi, b.hi);
+}
+
+bool same_interval_value(const IntervalValue& a, const IntervalValue& b) {
+    return same_interval(a.value, b.value) && a.maybe_discontinuous == b.maybe_discontinuous &&
+           a.maybe_undefined == b.maybe_undefined;
+}
+
+// The batched forms give each point or box the single call's bits, for batches of every size
+// around the evaluators' lane counts (an octree cell's 8 children, blocks of 256 points).
+TEST_P(EvaluatorConformance, batched_forms_match_single_calls_bitwise) {
+    auto batched = evaluator(), single = evaluator();
+    Rng rng(10);
+    for (std::size_t n : {1, 2, 7, 8, 9, 17}) {
+        std::vector<Box> boxes;
+        for (std::size_t i = 0; i < n; ++i)
+            boxes.push_back(random_box(rng, function().scale, function().special));
+        std::vector<IntervalValue> values(n);
+        std::vector<IntervalGradient> gradients(n);
+        batched->intervals(boxes, values);
+        batched->interval_gradients(boxes, gradients);
+        for (std::size_t i = 0; i < n; ++i) {
+            ASSERT_TRUE(same_interval_value(values[i], single->interval(boxes[i])))
+                << "batch of " << n << ", " << describe(boxes[i], values[i].value);
+            const IntervalGradient g = single->interval_gradient(boxes[i]);
+            ASSERT_TRUE(same_interval_value(gradients[i].value, g.value))
+                << "batch of " << n << ", " << describe(boxes[i], gradients[i].value.value);
+            for (int k = 0; k < 3; ++k)
+                ASSERT_TRUE(same_interval(gradients[i].gradient[k], g.gradient[k]))
+                    << "batch of " << n << ", " << describe(boxes[i], gradients[i].gradient[k]);
+        }
+    }
+    for (std::size_t n : {1, 3, 8, 255, 257}) {
+        std::vector<glm::dvec3> points = random_points(rng, static_cast<int>(n));
+        points.resize(n);
+        std::vector<double> x, y, z;
+        for (const auto& p : points) x.push_back(p.x), y.push_back(p.y), z.push_back(p.z);
+        std::vector<ValueGradient> out(n);
+        batched->value_gradients({x, y, z}, out);
+        for (std::size_t i = 0; i < n; ++i) {
+            const ValueGradient vg = single->value_gradient(points[i]);
+            ASSERT_TRUE(same_value(out[i].value, vg.value)) << describe(points[i]);
+            for (int k = 0; k < 3; ++k)
+                ASSERT_TRUE(same_value(out[i].gradient[k], vg.gradient[k]))
+                    << "d/d"
+                    << "xyz"[k] << " at " << describe(points[i]);
+        }
+    }
+}
+
 INSTANTIATE_TEST_SUITE_P(AllBackends, EvaluatorConformance, ::testing::ValuesIn(backends()),
                          [](const ::testing::TestParamInfo<Backend>& info) {
                              return info.param.name;

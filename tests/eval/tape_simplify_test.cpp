@@ -71,15 +71,26 @@ TEST(TapeSimplify, disabled_push_changes_nothing) {
 
 TEST(TapeSimplify, returns_nothing_without_proven_branch) {
     std::vector<Instruction> code = {{Op::VarX, 0, 0, 0}, {Op::VarY, 0, 0, 0}, {Op::Min, 0, 1, 0}};
-    std::vector<IntervalValue> overlapping = {
-        {{0, 2}, false, false}, {{1, 3}, false, false}, {{0, 2}, false, false}};
-    EXPECT_FALSE(simplify_on_box(code, overlapping).has_value());
-    std::vector<IntervalValue> apart = {
-        {{0, 1}, false, false}, {{2, 3}, false, false}, {{0, 1}, false, false}};
-    auto simplified = simplify_on_box(code, apart);
+    const std::vector<std::uint32_t> slots = {2};
+    EXPECT_FALSE(simplify_on_box(code, slots, std::vector{Choice::Both}).has_value());
+    auto simplified = simplify_on_box(code, slots, std::vector{Choice::A});
     ASSERT_TRUE(simplified.has_value());
     ASSERT_EQ(simplified->size(), 1u);
     EXPECT_EQ((*simplified)[0].op, Op::VarX);
+}
+
+TEST(TapeSimplify, proves_choices_from_enclosures) {
+    const IntervalValue low{{0, 1}, false, false}, high{{2, 3}, false, false};
+    const IntervalValue overlapping{{0.5, 2.5}, false, false};
+    EXPECT_EQ(prove_choice(Op::Min, low, high), Choice::A);
+    EXPECT_EQ(prove_choice(Op::Max, low, high), Choice::B);
+    EXPECT_EQ(prove_choice(Op::Min, high, low), Choice::B);
+    EXPECT_EQ(prove_choice(Op::Min, low, overlapping), Choice::Both);
+    IntervalValue undefined_high = high;
+    undefined_high.maybe_undefined = true;  // dropping it would turn its NaN into a number
+    EXPECT_EQ(prove_choice(Op::Min, low, undefined_high), Choice::Both);
+    EXPECT_EQ(prove_choice(Op::Max, low, undefined_high), Choice::B);
+    EXPECT_EQ(prove_choice(Op::Min, {Interval::empty(), false, true}, high), Choice::Both);
 }
 
 // prospero (7,866 instructions, hundreds of min/max): tiles of a 1024^2-style grid need a small
