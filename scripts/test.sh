@@ -22,5 +22,6 @@ bash scripts/fuzz.sh
 # encoder) and the viewer's pure modules (clients/web/test).
 node --test clients/js/test/ clients/web/test/
 # The viewer and its <isomesh-surface> element in Debian's chromium, served by a real isomesh-server on
-# a free loopback port (tests/web: viewer, layout, embed, streaming; screenshots in build/test-artifacts/web).
+# a free loopback port (tests/web: viewer, layout, embed, streaming, reconnect, expiry; screenshots in
+# build/test-artifacts/web).
 node --test tests/web/

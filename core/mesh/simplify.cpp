@@ -10,6 +10,7 @@
 #include "mesh/simplify.h"
 
 #include <array>
+#include <cassert>
 #include <queue>
 #include <vector>
 
@@ -65,18 +66,20 @@ class Simplifier {
         : mesh_(mesh, box_faces),
           quadrics_(mesh.positions.size()),
           stamps_(mesh.positions.size(), 0),
-          blocked_(mesh.positions.size()) {
-        for (std::uint32_t t = 0; t < mesh_.triangle_slots(); ++t) add_triangle_planes(t);
-        for (std::uint32_t v = 0; v < quadrics_.size(); ++v) push_edges(v);
-    }
+          blocked_(mesh.positions.size()) {}
 
-    SimplifyReport run(std::size_t target, const WorkBudget& budget) {
-        SimplifyReport report;
-        std::size_t popped = 0;
+    /// Collapses until the mesh has at most `target` triangles, no candidate is left, or the
+    /// budget is exhausted (checked every kCheckInterval candidates); true when not stopped by
+    /// the budget. Resumable: a later call goes on with the same queue.
+    bool advance(std::size_t target, const WorkBudget& budget, SimplifyReport& report) {
+        if (!prepare(budget)) {
+            report.cancelled = budget.cancelled();
+            return false;
+        }
         while (mesh_.live_triangles() > target && !queue_.empty()) {
-            if (++popped % kCheckInterval == 0 && budget.exhausted()) {
-                report.cancelled = true;
-                break;
+            if (++popped_ % kCheckInterval == 0 && budget.exhausted()) {
+                report.cancelled = budget.cancelled();
+                return false;
             }
             const Candidate c = queue_.top();
             queue_.pop();
@@ -91,11 +94,42 @@ class Simplifier {
         }
         report.triangles = mesh_.live_triangles();
         report.reached = report.triangles <= target;
+        return true;
+    }
+
+    void compact() { mesh_.compact(); }
+
+    SimplifyReport run(std::size_t target, const WorkBudget& budget) {
+        SimplifyReport report;
+        if (!advance(target, budget, report)) {
+            report.cancelled = true;  // cut short, by cancellation or by time
+            report.triangles = mesh_.live_triangles();
+        }
         mesh_.compact();
         return report;
     }
 
   private:
+    /// The quadrics of every vertex, then every edge's candidates, a chunk between two looks at
+    /// the budget; true once done.
+    bool prepare(const WorkBudget& budget) {
+        constexpr std::uint32_t kChunk = 16384;
+        while (prepared_triangles_ < mesh_.triangle_slots()) {
+            const std::uint32_t end = std::min<std::uint32_t>(
+                static_cast<std::uint32_t>(mesh_.triangle_slots()), prepared_triangles_ + kChunk);
+            for (; prepared_triangles_ < end; ++prepared_triangles_)
+                add_triangle_planes(prepared_triangles_);
+            if (budget.exhausted()) return false;
+        }
+        while (prepared_vertices_ < quadrics_.size()) {
+            const std::uint32_t end = std::min<std::uint32_t>(
+                static_cast<std::uint32_t>(quadrics_.size()), prepared_vertices_ + kChunk);
+            for (; prepared_vertices_ < end; ++prepared_vertices_) push_edges(prepared_vertices_);
+            if (budget.exhausted() && prepared_vertices_ < quadrics_.size()) return false;
+        }
+        return true;
+    }
+
     void add_triangle_planes(std::uint32_t t) {
         const auto& tri = mesh_.triangle(t);
         const glm::dvec3 a = mesh_.position(tri[0]), b = mesh_.position(tri[1]),
@@ -157,6 +191,9 @@ class Simplifier {
     std::vector<std::uint32_t> stamps_;
     std::vector<std::vector<Candidate>> blocked_;  // refused candidates, by the vertex to move
     std::priority_queue<Candidate, std::vector<Candidate>, std::greater<>> queue_;
+    std::size_t popped_ = 0;
+    std::uint32_t prepared_triangles_ = 0;  // prepare()'s progress
+    std::uint32_t prepared_vertices_ = 0;
 };
 
 }  // namespace
@@ -170,6 +207,40 @@ SimplifyReport simplify_to_budget(Mesh& mesh, std::span<const std::uint8_t> box_
         return report;
     }
     return Simplifier(mesh, box_faces).run(target_triangles, budget);
+}
+
+class Simplification::Collapses : public Simplifier {
+  public:
+    using Simplifier::Simplifier;
+};
+
+Simplification::Simplification(Mesh mesh, std::vector<std::uint8_t> box_faces,
+                               std::size_t target_triangles)
+    : mesh_(std::make_unique<Mesh>(std::move(mesh))),
+      box_faces_(std::move(box_faces)),
+      target_(target_triangles) {
+    if (mesh_->triangle_count() <= target_) {
+        report_.triangles = mesh_->triangle_count();
+        report_.reached = true;
+        done_ = true;
+        return;
+    }
+    collapses_ = std::make_unique<Collapses>(*mesh_, box_faces_);
+}
+
+Simplification::~Simplification() = default;
+
+bool Simplification::advance(const WorkBudget& budget) {
+    if (done_) return true;
+    done_ = collapses_->advance(target_, budget, report_);
+    if (done_) collapses_->compact();
+    return done_;
+}
+
+Mesh Simplification::take() {
+    assert(done_);
+    collapses_.reset();
+    return std::move(*mesh_);
 }
 
 }  // namespace isomesh

@@ -9,7 +9,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
+#include <vector>
 
 #include "mesh/mesh.h"
 #include "work/work_budget.h"
@@ -32,5 +34,33 @@ struct SimplifyReport {
 /// box_faces.size() == vertex_count()).
 SimplifyReport simplify_to_budget(Mesh& mesh, std::span<const std::uint8_t> box_faces,
                                   std::size_t target_triangles, const WorkBudget& budget = {});
+
+/// simplify_to_budget in slices: each advance() goes on where the last one stopped, so that a
+/// large mesh (the blobby cube's 712,000 triangles) is simplified over many short steps. The
+/// result does not depend on the slicing. Same preconditions as simplify_to_budget.
+class Simplification {
+  public:
+    Simplification(Mesh mesh, std::vector<std::uint8_t> box_faces, std::size_t target_triangles);
+    ~Simplification();
+    Simplification(const Simplification&) = delete;
+    Simplification& operator=(const Simplification&) = delete;
+
+    /// Collapses edges until the target is met, no collapse is allowed or `budget` is
+    /// exhausted; true once done (report().cancelled when the budget was cancelled).
+    bool advance(const WorkBudget& budget);
+    bool done() const { return done_; }
+    const SimplifyReport& report() const { return report_; }
+    /// The simplified mesh, compacted. Precondition: done().
+    Mesh take();
+
+  private:
+    class Collapses;
+    std::unique_ptr<Mesh> mesh_;  // where the collapses below point
+    std::vector<std::uint8_t> box_faces_;
+    std::unique_ptr<Collapses> collapses_;
+    std::size_t target_;
+    SimplifyReport report_;
+    bool done_ = false;
+};
 
 }  // namespace isomesh

@@ -32,6 +32,7 @@
 #include "polygonize/cell_classification.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "polygonize/edge_roots.h"
@@ -70,14 +71,24 @@ struct EdgeSurvey {
 
 EdgeSurvey survey_edges(Evaluator& evaluator, CornerCache& corners, const Lattice& lattice,
                         const CellId& cell, int max_bisections) {
-    EdgeSurvey survey;
+    std::array<EdgeSegment, 12> edges;
+    std::array<Box, 12> boxes;
     for (int e = 0; e < 12; ++e) {
         const auto [c0, c1] = kEdgeCorners[e];
         const glm::u32vec3 p0 = lattice.corner(cell, c0), p1 = lattice.corner(cell, c1);
-        const EdgeSegment edge{lattice.point(p0), lattice.point(p1), corners.value(p0),
-                               corners.value(p1), e / 4};
-        const double min_length = std::ldexp(edge.length(), -max_bisections);
-        const EdgeRootCount count = count_edge_roots(evaluator, edge, min_length);
+        edges[e] = {lattice.point(p0), lattice.point(p1), corners.value(p0), corners.value(p1),
+                    e / 4};
+        boxes[e] = edges[e].box();
+    }
+    // The whole edges' enclosures in one batch (the evaluator's vector kernels): most edges are
+    // decided by them alone.
+    std::array<IntervalGradient, 12> wholes;
+    evaluator.interval_gradients(boxes, wholes);
+    EdgeSurvey survey;
+    for (int e = 0; e < 12; ++e) {
+        const double min_length = std::ldexp(edges[e].length(), -max_bisections);
+        const EdgeRootCount count =
+            count_edge_roots(evaluator, edges[e], min_length, 2, &wholes[e]);
         survey.roots += count.roots;
         survey.max_roots = std::max(survey.max_roots, count.roots);
         survey.false_crossing |= count.false_crossing;

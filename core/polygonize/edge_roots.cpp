@@ -134,17 +134,18 @@ class RootCounter {
     RootCounter(Evaluator& evaluator, double min_length, int limit)
         : evaluator_(evaluator), min_length_(min_length), limit_(limit) {}
 
-    EdgeRootCount count(const EdgeSegment& edge) {
+    EdgeRootCount count(const EdgeSegment& edge, const IntervalGradient* whole) {
         discontinuous_min_length_ = std::max(min_length_, edge.length() / kDiscontinuousPieces);
-        visit(edge);
+        visit(edge, whole);
         return result_;
     }
 
   private:
-    void visit(const EdgeSegment& piece) {
+    void visit(const EdgeSegment& piece, const IntervalGradient* known = nullptr) {
         if (result_.roots >= limit_) return;
         const bool sign_change = is_inside(piece.fa) != is_inside(piece.fb);
-        const IntervalGradient enclosure = evaluator_.interval_gradient(piece.box());
+        const IntervalGradient enclosure =
+            known != nullptr ? *known : evaluator_.interval_gradient(piece.box());
         if (enclosure.value.value.excludes_zero()) {
             result_.false_crossing |= sign_change;
             return;
@@ -181,8 +182,8 @@ class RootCounter {
 }  // namespace
 
 EdgeRootCount count_edge_roots(Evaluator& evaluator, const EdgeSegment& edge, double min_length,
-                               int limit) {
-    return RootCounter(evaluator, min_length, limit).count(edge);
+                               int limit, const IntervalGradient* whole) {
+    return RootCounter(evaluator, min_length, limit).count(edge, whole);
 }
 
 }  // namespace isomesh

@@ -63,7 +63,9 @@ struct EdgeRootCount {
 /// however short the piece), below which the ends' signs decide and find_edge_root tells roots
 /// from poles. Stops once `limit` roots are
 /// found. Evaluates f at the midpoints it needs. Precondition: edge.axis >= 0.
+/// `whole`, when given, is the enclosure of f on the whole edge (edge.box()), computed by the
+/// caller (in a batch with other edges'); the count is the same.
 EdgeRootCount count_edge_roots(Evaluator& evaluator, const EdgeSegment& edge, double min_length,
-                               int limit = 2);
+                               int limit = 2, const IntervalGradient* whole = nullptr);
 
 }  // namespace isomesh

@@ -25,11 +25,16 @@
 #include "polygonize/polygonizer.h"
 
 #include <algorithm>
+#include <cassert>
 #include <chrono>
 #include <cmath>
+#include <memory>
+#include <optional>
 #include <stdexcept>
 #include <thread>
+#include <type_traits>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -193,8 +198,8 @@ std::vector<FrontierCell> split_cells(EvaluatorPool& workers, const Lattice& lat
             for (int octant = 0; octant < 8; ++octant)
                 subtrees[i].push_back({which[i].child(octant), CellState::Pending});
         } else {
-            subtrees[i] = split_settled(evaluator, lattice, settings, which[i], values,
-                                        evaluated[i], budget);
+            subtrees[i] =
+                split_settled(evaluator, lattice, settings, which[i], values, evaluated[i], budget);
         }
     });
     std::vector<FrontierCell> result;
@@ -213,30 +218,14 @@ std::vector<FrontierCell> split_cells(EvaluatorPool& workers, const Lattice& lat
     return result;
 }
 
-/// The leaves for which `predicate` holds, in order (evaluated in parallel).
-template <typename Predicate>
-std::vector<CellId> select(EvaluatorPool& workers, const std::vector<CellId>& leaves,
-                           const Predicate& predicate) {
-    std::vector<std::uint8_t> chosen(leaves.size());
-    workers.for_each(task_count(leaves.size(), kCellsPerTask), [&](std::size_t task, auto&) {
-        const std::size_t end = std::min(leaves.size(), (task + 1) * kCellsPerTask);
-        for (std::size_t i = task * kCellsPerTask; i < end; ++i) chosen[i] = predicate(leaves[i]);
-    });
-    std::vector<CellId> result;
-    for (std::size_t i = 0; i < leaves.size(); ++i) {
-        if (chosen[i]) result.push_back(leaves[i]);
-    }
-    return result;
-}
-
 /// The surface's vertices on lattice edges: roots on the finest steps of the crossings used.
 struct CrossingRoots {
     std::vector<CrossingKey> keys;  // sorted
     std::vector<EdgeRoot> roots;
 };
 
-CrossingRoots find_roots(EvaluatorPool& workers, const Lattice& lattice, const ValueMap& values,
-                         const std::vector<LeafMeshes>& parts, const WorkBudget& budget) {
+/// The crossings the leaves' triangles use, their roots not found yet.
+CrossingRoots crossings_used(const std::vector<LeafMeshes>& parts) {
     CrossingRoots result;
     for (const LeafMeshes& part : parts) {
         for (const auto& triangle : part.triangles) {
@@ -248,16 +237,22 @@ CrossingRoots find_roots(EvaluatorPool& workers, const Lattice& lattice, const V
     std::sort(result.keys.begin(), result.keys.end());
     result.keys.erase(std::unique(result.keys.begin(), result.keys.end()), result.keys.end());
     result.roots.resize(result.keys.size());
-    workers.for_each(
-        task_count(result.keys.size(), kEdgesPerTask),
-        [&](std::size_t task, CountingEvaluator& evaluator) {
-            const std::size_t end = std::min(result.keys.size(), (task + 1) * kEdgesPerTask);
-            for (std::size_t i = task * kEdgesPerTask; i < end && !budget.cancelled(); ++i) {
-                result.roots[i] =
-                    find_edge_root(evaluator, crossing_segment(values, lattice, result.keys[i]));
-            }
-        });
     return result;
+}
+
+/// Finds the roots of crossings [begin, end) of `crossings`.
+void find_roots(EvaluatorPool& workers, const Lattice& lattice, const ValueMap& values,
+                CrossingRoots& crossings, std::size_t begin, std::size_t end,
+                const WorkBudget& budget) {
+    workers.for_each(task_count(end - begin, kEdgesPerTask),
+                     [&](std::size_t task, CountingEvaluator& evaluator) {
+                         const std::size_t first = begin + task * kEdgesPerTask;
+                         const std::size_t last = std::min(end, first + kEdgesPerTask);
+                         for (std::size_t i = first; i < last && !budget.cancelled(); ++i) {
+                             crossings.roots[i] = find_edge_root(
+                                 evaluator, crossing_segment(values, lattice, crossings.keys[i]));
+                         }
+                     });
 }
 
 /// The mesh: a vertex per crossing that is a root, then the leaves' own vertices; triangles
@@ -312,117 +307,333 @@ std::vector<std::uint8_t> box_faces(const Mesh& mesh, const Box& box) {
     return faces;
 }
 
-/// The mesh of a frontier (steps 2 to 6 of the file comment).
+}  // namespace
+
+/// The mesh of a frontier (steps 2 to 6 of the file comment), made over one or several calls of
+/// advance(): the work goes in chunks of a few thousand leaves or crossings, the budget checked
+/// between them, and what a call leaves undone the next one takes up, so that the mesh does not
+/// depend on where budgets cut it.
 class FrontierMesher {
   public:
     FrontierMesher(EvaluatorPool& workers, const Lattice& lattice, const OctreeSettings& settings,
-                   ValueMap& values, const WorkBudget& budget)
+                   ValueMap& values, std::vector<FrontierCell> frontier)
         : workers_(workers),
           lattice_(lattice),
           settings_(settings),
           values_(values),
-          budget_(budget) {}
-
-    PolygonizeResult run(std::vector<FrontierCell> frontier) {
-        frontier_ = std::move(frontier);
-        preview_ = std::any_of(frontier_.begin(), frontier_.end(), [](const FrontierCell& f) {
-            return f.state == CellState::Pending;
-        });
+          frontier_(std::move(frontier)) {
+        preview_ = std::any_of(frontier_.begin(), frontier_.end(),
+                               [](const FrontierCell& f) { return f.state == CellState::Pending; });
         leaves_ = cells_of(frontier_);
         finest_ = deepest(frontier_);
         fresh_ = leaves_;
         unlocated_ = leaves_;
-        std::vector<LeafMeshes> parts = mesh_leaves();
-        PolygonizeResult result;
-        PolygonizeStats& stats = result.stats;
+        index_.emplace(leaves_);
+        states_.resize(leaves_.size());
+    }
+
+    /// Goes on until the mesh is made (true) or the budget is exhausted or cancelled (false).
+    bool advance(const WorkBudget& budget) {
+        budget_ = &budget;
+        while (stage_ != Stage::done) {
+            if (budget.cancelled() || !run_chunk()) return false;
+            if (stage_ != Stage::done && budget.exhausted()) return false;
+        }
+        return true;
+    }
+
+    /// The mesh. Precondition: advance() returned true.
+    PolygonizeResult take() { return std::move(result_); }
+
+  private:
+    /// Grades the frontier, then meshes every leaf; splits the leaves whose faces do not match
+    /// their finer neighbours, and again, until all match (leaves of equal size always do, so
+    /// this ends). Incremental: after a split, only the new leaves and the leaves across the
+    /// split cells' faces are graded and meshed again (a leaf's grading and mesh depend only on
+    /// itself and its face neighbours), so the result is that of meshing everything each time.
+    /// Then the roots of the crossings used, the mesh, its cleanup.
+    enum class Stage { corners, grade, split, locate, mesh, roots, assemble, finish, done };
+
+    /// A leaf's meshing state, kept beside leaves_.
+    struct LeafState {
+        std::unique_ptr<LeafMeshes> mesh;  // none while it has no triangles (most leaves)
+        bool grade = true;                 // needs_grading must look at it (again)
+        bool stale = true;                 // its mesh must be made (again)
+    };
+
+    /// Leaves, crossings or cells handled between two looks at the budget.
+    static constexpr std::size_t kChunk = 4096;
+
+    /// One chunk of the current stage; false when cancelled midway (the chunk is done again).
+    bool run_chunk() {
+        switch (stage_) {
+            case Stage::corners:
+                return evaluate_fresh_corners();
+            case Stage::grade:
+                return select_chunk(&LeafState::grade, [this](std::size_t i, CountingEvaluator&) {
+                    return needs_grading(input(), leaves_[i]);
+                });
+            case Stage::split:
+                split_chunk();
+                return !budget_->cancelled();
+            case Stage::locate:
+                return locate_chunk();
+            case Stage::mesh:
+                return select_chunk(&LeafState::stale,
+                                    [this](std::size_t i, CountingEvaluator& evaluator) {
+                                        return !mesh_stale_leaf(i, evaluator);
+                                    });
+            case Stage::roots:
+                return roots_chunk();
+            case Stage::assemble:
+                result_.mesh = assemble(roots_, parts_);
+                stage_ = Stage::finish;
+                return true;
+            case Stage::finish:
+                finish();
+                return !budget_->cancelled();
+            case Stage::done:
+                return true;
+        }
+        return true;
+    }
+
+    LeafMeshingInput input() const { return {lattice_, values_, crossings_, *index_}; }
+
+    bool evaluate_fresh_corners() {
+        const std::size_t n = std::min(kChunk, fresh_.size());
+        const std::vector<CellId> chunk(fresh_.end() - static_cast<std::ptrdiff_t>(n),
+                                        fresh_.end());
+        evaluate_corners(workers_, lattice_, chunk, values_, *budget_);
+        if (budget_->cancelled()) return false;  // corners are missing: nothing below may run
+        fresh_.resize(fresh_.size() - n);
+        if (fresh_.empty()) begin_selection(Stage::grade, &LeafState::grade);
+        return true;
+    }
+
+    /// Starts a stage that looks at every leaf with `flag` set.
+    void begin_selection(Stage stage, bool LeafState::*flag) {
+        stage_ = stage;
+        candidates_ = flagged(flag);
+        cursor_ = 0;
+        selected_.clear();
+    }
+
+    /// Runs `predicate` on the next chunk of candidates_, gathering those it holds for; once all
+    /// are seen, moves on: to splitting them if any, else to the next stage.
+    template <typename Predicate>
+    bool select_chunk(bool LeafState::*flag, const Predicate& predicate) {
+        const std::size_t end = std::min(candidates_.size(), cursor_ + kChunk);
+        const std::vector<std::size_t> chunk(candidates_.begin() + cursor_,
+                                             candidates_.begin() + end);
+        const std::vector<std::size_t> chosen = select(chunk, predicate);
+        if (budget_->cancelled()) return false;
+        for (std::size_t i : chunk) states_[i].*flag = false;
+        selected_.insert(selected_.end(), chosen.begin(), chosen.end());
+        cursor_ = end;
+        if (cursor_ < candidates_.size()) return true;
+        if (!selected_.empty()) {
+            begin_split();
+        } else if (stage_ == Stage::grade) {
+            stage_ = Stage::locate;
+        } else {
+            begin_roots();
+        }
+        return true;
+    }
+
+    void begin_split() {
+        to_split_.clear();
+        for (std::size_t i : selected_) to_split_.push_back(leaves_[i]);
+        split_cursor_ = 0;
+        stage_ = Stage::split;
+    }
+
+    void split_chunk() {
+        const std::size_t end = std::min(to_split_.size(), split_cursor_ + kChunk);
+        split({to_split_.begin() + split_cursor_, to_split_.begin() + end});
+        split_cursor_ = end;
+        if (split_cursor_ == to_split_.size()) stage_ = Stage::corners;
+    }
+
+    bool locate_chunk() {
+        const std::size_t n = std::min(kChunk, unlocated_.size());
+        const std::vector<CellId> chunk(unlocated_.end() - static_cast<std::ptrdiff_t>(n),
+                                        unlocated_.end());
+        locate_crossings(workers_, lattice_, chunk, finest_, values_, crossings_, *budget_);
+        if (budget_->cancelled()) return false;
+        unlocated_.resize(unlocated_.size() - n);
+        if (unlocated_.empty()) begin_selection(Stage::mesh, &LeafState::stale);
+        return true;
+    }
+
+    void begin_roots() {
+        for (LeafState& state : states_) {
+            if (state.mesh) parts_.push_back(std::move(*state.mesh));
+        }
+        states_.clear();
+        roots_ = crossings_used(parts_);
+        cursor_ = 0;
+        stage_ = Stage::roots;
+    }
+
+    bool roots_chunk() {
+        const std::size_t end = std::min(roots_.keys.size(), cursor_ + kChunk);
+        find_roots(workers_, lattice_, values_, roots_, cursor_, end, *budget_);
+        if (budget_->cancelled()) return false;
+        cursor_ = end;
+        if (cursor_ == roots_.keys.size()) stage_ = Stage::assemble;
+        return true;
+    }
+
+    void finish() {
+        PolygonizeStats& stats = result_.stats;
         stats.cells = leaves_.size();
         stats.depth = finest_;
         for (const FrontierCell& f : frontier_) {
             stats.unresolved_cells += f.state != CellState::Leaf;
             stats.pending_cells += f.state == CellState::Pending;
         }
-        if (budget_.cancelled()) return result;
-        result.mesh = assemble(find_roots(workers_, lattice_, values_, parts, budget_), parts);
-        if (budget_.cancelled()) return result;
         const glm::dvec3 step = lattice_.box().size() / std::ldexp(1.0, stats.depth);
         const ThinTriangleSettings cleanup{kMinEdgeFraction * std::min({step.x, step.y, step.z}),
                                            kMinQuality};
         const ThinTriangleReport report =
-            remove_thin_triangles(result.mesh, box_faces(result.mesh, lattice_.box()), cleanup);
+            remove_thin_triangles(result_.mesh, box_faces(result_.mesh, lattice_.box()), cleanup);
         stats.collapses = report.collapses;
         stats.flips = report.flips;
-        build_adjacency(result.mesh);
+        build_adjacency(result_.mesh);
+        stage_ = Stage::done;
+    }
+
+    /// Meshes stale leaf i; false when it did not match.
+    bool mesh_stale_leaf(std::size_t i, CountingEvaluator& evaluator) {
+        LeafState& state = states_[i];
+        LeafMeshes mesh;
+        mesh_leaf(evaluator, input(), leaves_[i], mesh);
+        const bool matched = mesh.unmatched.empty();
+        state.mesh = mesh.triangles.empty() && mesh.extra_positions.empty()
+                         ? nullptr
+                         : std::make_unique<LeafMeshes>(std::move(mesh));
+        return matched;
+    }
+
+    /// The indices of the leaves with `flag` set, in order.
+    std::vector<std::size_t> flagged(bool LeafState::*flag) const {
+        std::vector<std::size_t> out;
+        for (std::size_t i = 0; i < states_.size(); ++i) {
+            if (states_[i].*flag) out.push_back(i);
+        }
+        return out;
+    }
+
+    /// Those of `candidates` (leaf indices, in order) for which `predicate` holds, evaluated in
+    /// parallel (the predicate may take the task's evaluator), in order.
+    template <typename Predicate>
+    std::vector<std::size_t> select(const std::vector<std::size_t>& candidates,
+                                    const Predicate& predicate) {
+        std::vector<std::uint8_t> chosen(candidates.size());
+        workers_.for_each(
+            task_count(candidates.size(), kCellsPerTask),
+            [&](std::size_t task, CountingEvaluator& evaluator) {
+                const std::size_t end = std::min(candidates.size(), (task + 1) * kCellsPerTask);
+                for (std::size_t k = task * kCellsPerTask; k < end && !budget_->cancelled(); ++k) {
+                    if constexpr (std::is_invocable_v<Predicate, std::size_t>) {
+                        chosen[k] = predicate(candidates[k]);
+                    } else {
+                        chosen[k] = predicate(candidates[k], evaluator);
+                    }
+                }
+            });
+        std::vector<std::size_t> result;
+        for (std::size_t k = 0; k < candidates.size(); ++k) {
+            if (chosen[k]) result.push_back(candidates[k]);
+        }
         return result;
     }
 
-  private:
-    /// Grades the frontier, then meshes every leaf; splits the leaves whose faces do not match
-    /// their finer neighbours, and again, until all match (leaves of equal size always do, so
-    /// this ends).
-    std::vector<LeafMeshes> mesh_leaves() {
-        std::vector<LeafMeshes> parts;
-        while (!budget_.cancelled()) {
-            evaluate_corners(workers_, lattice_, fresh_, values_, budget_);
-            if (budget_.cancelled()) break;  // corners are missing: nothing below may run
-            fresh_.clear();
-            const LeafIndex index(leaves_);
-            const LeafMeshingInput input{lattice_, values_, crossings_, index};
-            const std::vector<CellId> ungraded = select(
-                workers_, leaves_, [&](const CellId& leaf) { return needs_grading(input, leaf); });
-            if (!ungraded.empty()) {
-                split(ungraded);
-                continue;
-            }
-            locate_crossings(workers_, lattice_, unlocated_, finest_, values_, crossings_, budget_);
-            if (budget_.cancelled()) break;
-            unlocated_.clear();
-            parts.assign(task_count(leaves_.size(), kCellsPerTask), {});
-            workers_.for_each(parts.size(), [&](std::size_t task, CountingEvaluator& evaluator) {
-                const std::size_t end = std::min(leaves_.size(), (task + 1) * kCellsPerTask);
-                for (std::size_t i = task * kCellsPerTask; i < end && !budget_.cancelled(); ++i)
-                    mesh_leaf(evaluator, input, leaves_[i], parts[task]);
-            });
-            std::vector<CellId> unmatched;
-            for (const LeafMeshes& part : parts) {
-                unmatched.insert(unmatched.end(), part.unmatched.begin(), part.unmatched.end());
-            }
-            if (unmatched.empty() || budget_.cancelled()) break;
-            split(unmatched);
-        }
-        return parts;
-    }
-
-    void split(const std::vector<CellId>& which) {
+    /// Splits the leaves `cells` (in order), keeping the index, the leaves' states and the
+    /// crossings up to date.
+    void split(const std::vector<CellId>& cells) {
         const std::size_t before = fresh_.size();
-        frontier_ = split_cells(workers_, lattice_, settings_, frontier_, which, preview_, values_,
-                                fresh_, budget_);
-        leaves_ = cells_of(frontier_);
+        frontier_ = split_cells(workers_, lattice_, settings_, frontier_, cells, preview_, values_,
+                                fresh_, *budget_);
+        std::vector<CellId> old_leaves = std::exchange(leaves_, cells_of(frontier_));
+        carry_states(old_leaves);
+        for (const CellId& cell : cells) {
+            for (const CellId& n : index_->face_neighbours(cell)) {
+                LeafState& state = states_[position(n)];
+                state.grade = state.stale = true;
+            }
+        }
         const int finest = deepest(frontier_);
         if (finest != finest_) {
             // Crossings are named by steps of the finest leaf: all are located again.
             finest_ = finest;
             crossings_.clear();
             unlocated_ = leaves_;
+            for (LeafState& state : states_) state.stale = true;
         } else {
             unlocated_.insert(unlocated_.end(), fresh_.begin() + before, fresh_.end());
         }
+    }
+
+    /// Moves the states of the leaves kept from `old_leaves` to their places in leaves_; the
+    /// leaves that replaced a split one start fresh, and the index learns of them. (Both lists
+    /// are in octree order, a split cell's leaves where it was.)
+    void carry_states(const std::vector<CellId>& old_leaves) {
+        std::vector<LeafState> states(leaves_.size());
+        std::size_t j = 0;
+        for (std::size_t i = 0; i < old_leaves.size(); ++i) {
+            const CellId& old = old_leaves[i];
+            if (j < leaves_.size() && leaves_[j] == old) {
+                states[j++] = std::move(states_[i]);
+                continue;
+            }
+            const std::size_t first = j;  // old was split: its subtree's leaves follow
+            while (j < leaves_.size() && leaves_[j].depth > old.depth &&
+                   leaves_[j].ancestor(old.depth) == old) {
+                ++j;
+            }
+            index_->replace(old, std::span(leaves_).subspan(first, j - first));
+        }
+        assert(j == leaves_.size());
+        states_ = std::move(states);
+    }
+
+    /// The index in leaves_ of `leaf` (leaves_ is in octree order: a binary search).
+    std::size_t position(const CellId& leaf) const {
+        const std::uint64_t order = lattice_.octree_order(leaf);
+        const auto it = std::lower_bound(
+            leaves_.begin(), leaves_.end(), order,
+            [&](const CellId& c, std::uint64_t o) { return lattice_.octree_order(c) < o; });
+        assert(it != leaves_.end() && *it == leaf);
+        return static_cast<std::size_t>(it - leaves_.begin());
     }
 
     EvaluatorPool& workers_;
     const Lattice& lattice_;
     const OctreeSettings& settings_;
     ValueMap& values_;
-    const WorkBudget& budget_;
+    const WorkBudget* budget_ = nullptr;  // of the advance() under way
     std::vector<FrontierCell> frontier_;
     bool preview_ = false;  // some cell is pending: the octree is unfinished
     std::vector<CellId> leaves_;
+    std::optional<LeafIndex> index_;  // of leaves_
+    std::vector<LeafState> states_;   // of leaves_
     int finest_ = 0;
     std::unordered_map<std::uint64_t, CrossingKey> crossings_;
     std::vector<CellId> fresh_;      // leaves whose corners are not evaluated yet
     std::vector<CellId> unlocated_;  // leaves whose crossings are not located yet
+    Stage stage_ = Stage::corners;
+    std::vector<std::size_t> candidates_;  // leaves the current selection looks at
+    std::size_t cursor_ = 0;               // in candidates_, or in roots_.keys
+    std::vector<std::size_t> selected_;    // those of candidates_ seen so far that it chose
+    std::vector<CellId> to_split_;
+    std::size_t split_cursor_ = 0;
+    std::vector<LeafMeshes> parts_;
+    CrossingRoots roots_;
+    PolygonizeResult result_;
 };
-
-}  // namespace
 
 void validate(const PolygonizeSettings& s) {
     for (int axis = 0; axis < 3; ++axis) {
@@ -467,26 +678,45 @@ void Polygonizer::advance(const WorkBudget& budget, std::size_t max_frontier) {
     octree_.advance(pool_, values_, budget, max_frontier);
 }
 
+Polygonizer::~Polygonizer() = default;
+
 PolygonizeResult Polygonizer::mesh(const WorkBudget& budget) {
+    slicing_.reset();
+    std::optional<PolygonizeResult> result = mesh_slice(WorkBudget(budget.cancel_flag()));
+    if (result) return std::move(*result);
+    PolygonizeResult cancelled;
+    cancelled.stats.cancelled = true;
+    return cancelled;
+}
+
+std::optional<PolygonizeResult> Polygonizer::mesh_slice(const WorkBudget& budget) {
+    if (!slicing_) {
+        slicing_ = std::make_unique<Slicing>();
+        slicing_->points_before = pool_.point_evaluations();
+        slicing_->intervals_before = pool_.interval_evaluations();
+        if (!octree_.found_region()) {
+            slicing_->mesher = std::make_unique<FrontierMesher>(pool_, lattice_, octree_.settings(),
+                                                                values_, octree_.frontier());
+        }
+    }
     const auto start = std::chrono::steady_clock::now();
-    const std::size_t points_before = pool_.point_evaluations();
-    const std::size_t intervals_before = pool_.interval_evaluations();
+    const bool done = !slicing_->mesher || slicing_->mesher->advance(budget);
+    slicing_->time += std::chrono::steady_clock::now() - start;
+    if (budget.cancelled()) slicing_.reset();  // a cancelled mesh is started again
+    if (!done || !slicing_) return std::nullopt;
     PolygonizeResult result;
-    if (octree_.found_region()) {
-        result.stats.region_cells = octree_.counts().regions;
+    if (slicing_->mesher) {
+        result = slicing_->mesher->take();
     } else {
-        FrontierMesher mesher(pool_, lattice_, octree_.settings(), values_, budget);
-        result = mesher.run(octree_.frontier());
+        result.stats.region_cells = octree_.counts().regions;
     }
     PolygonizeStats& stats = result.stats;
-    stats.cancelled = budget.cancelled();
-    if (stats.cancelled) result.mesh = Mesh{};
-    stats.evaluations = pool_.point_evaluations() - points_before;
-    stats.interval_evaluations = pool_.interval_evaluations() - intervals_before;
+    stats.evaluations = pool_.point_evaluations() - slicing_->points_before;
+    stats.interval_evaluations = pool_.interval_evaluations() - slicing_->intervals_before;
     stats.triangles = result.mesh.triangle_count();
     stats.vertices = result.mesh.vertex_count();
-    stats.time_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    stats.time_ms = std::chrono::duration<double, std::milli>(slicing_->time).count();
+    slicing_.reset();
     return result;
 }
 

@@ -9,8 +9,10 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstddef>
 #include <memory>
+#include <optional>
 
 #include "eval/evaluator.h"
 #include "mesh/mesh.h"
@@ -71,10 +73,13 @@ struct PolygonizeResult {
 void validate(const PolygonizeSettings& settings);
 
 /// Phase 1 a slice at a time. Not thread-safe; its work runs on its own evaluator pool.
+class FrontierMesher;  // polygonizer.cpp
+
 class Polygonizer {
   public:
     /// Throws std::invalid_argument for invalid settings or a null field.
     Polygonizer(std::shared_ptr<const Field> field, const PolygonizeSettings& settings);
+    ~Polygonizer();
 
     /// Classifies octree cells, the largest first, until all are classified, a region where f
     /// is zero is found, the budget is exhausted, or the octree's frontier holds about
@@ -89,6 +94,12 @@ class Polygonizer {
     /// corners like leaves, without the guarantee. Runs to its end unless the budget is cancelled
     /// (then the mesh is empty and stats.cancelled set); its time limit is not checked.
     PolygonizeResult mesh(const WorkBudget& budget);
+    /// mesh() over as many calls as the budgets need (the final mesh of a large octree takes
+    /// seconds): each call goes on with the mesh the last one left unfinished, or starts one,
+    /// and returns it once made, the same as mesh() makes. A cancelled call drops the unfinished
+    /// mesh. Precondition: the octree does not change between the calls (complete(), or no
+    /// advance() or settle() in between).
+    std::optional<PolygonizeResult> mesh_slice(const WorkBudget& budget);
 
     const OctreeCounts& counts() const { return octree_.counts(); }
     /// Evaluations made so far, by every worker.
@@ -103,6 +114,14 @@ class Polygonizer {
     Lattice lattice_;
     Octree octree_;
     ValueMap values_;
+    /// A mesh under way in slices (mesh_slice).
+    struct Slicing {
+        std::unique_ptr<FrontierMesher> mesher;  // null where a region was found
+        std::size_t points_before = 0;
+        std::size_t intervals_before = 0;
+        std::chrono::steady_clock::duration time{};
+    };
+    std::unique_ptr<Slicing> slicing_;
 };
 
 /// Meshes the surface f = 0 of `field` inside settings.box: Polygonizer run to the end.

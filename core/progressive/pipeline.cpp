@@ -2,6 +2,7 @@
 #include "progressive/pipeline.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <stdexcept>
 #include <utility>
 
@@ -73,6 +74,14 @@ Pipeline::~Pipeline() = default;
 
 PipelineStep Pipeline::step(const WorkBudget& budget) {
     PipelineStep out;
+    if (simplifying_) {
+        // A large phase-1 mesh on its way to the budget: nothing else moves meanwhile.
+        if (continue_install(budget) && !phase1_ && !budget.exhausted())
+            refine(out, {kAllOperations, budget});
+        refine(out, {0, budget});
+        out.cancelled = budget.cancelled();
+        return out;
+    }
     const bool first = !refiner_;
     const bool resolving = phase1_ != nullptr;
     if (first) {
@@ -89,7 +98,7 @@ PipelineStep Pipeline::step(const WorkBudget& budget) {
     }
     // Phase 1 just ended: refine with what the step has left, so that a mesh already meeting the
     // constraint leaves flagged converged.
-    if (refiner_ && resolving && !phase1_ && !budget.exhausted())
+    if (refiner_ && resolving && !phase1_ && !simplifying_ && !budget.exhausted())
         refine(out, {kAllOperations, budget});
     if (refiner_ && first) {
         out.delta = refiner_->snapshot();
@@ -179,13 +188,21 @@ void Pipeline::advance_phase1(const WorkBudget& budget) {
                        kRemeshGrowth * static_cast<double>(classified_at_last_mesh_);
     if (!field_changing_ && grown &&
         counts.pending + counts.leaves + counts.unresolved <= settings_.max_intermediate_cells)
-        install(phase1_mesh(budget).mesh, budget);
+        install(phase1_mesh(budget).mesh, budget, true);
 }
 
 void Pipeline::finish_phase1(const WorkBudget& budget) {
     if (field_changing_ && refiner_->field_change_pending()) return;  // decide once moved
-    PolygonizeResult result = phase1_mesh(budget);
-    if (budget.cancelled()) return;
+    // The final mesh can take seconds: made over as many steps as it needs (but the first
+    // step's mesh is made in it).
+    if (!final_mesh_) {
+        final_mesh_ = phase1_->mesh_slice(refiner_ ? budget : WorkBudget(budget.cancel_flag()));
+        if (!final_mesh_ || budget.cancelled()) return;
+        record_phase1_mesh(*final_mesh_);
+        if (refiner_ && budget.exhausted()) return;  // installed at the next step
+    }
+    PolygonizeResult result = std::move(*final_mesh_);
+    final_mesh_.reset();
     status_.resolving = false;
     status_.region = result.stats.region_cells > 0;
     status_.certified = result.stats.certified();
@@ -197,17 +214,21 @@ void Pipeline::finish_phase1(const WorkBudget& budget) {
         return;
     }
     field_changing_ = false;
-    install(std::move(result.mesh), budget);
+    install(std::move(result.mesh), budget, true);
 }
 
 PolygonizeResult Pipeline::phase1_mesh(const WorkBudget& budget) {
     PolygonizeResult result = phase1_->mesh(budget);
+    record_phase1_mesh(result);
+    return result;
+}
+
+void Pipeline::record_phase1_mesh(const PolygonizeResult& result) {
     classified_at_last_mesh_ = phase1_->counts().classified;
     phase1_stats_ = result.stats;
     status_.unresolved_cells = result.stats.unresolved_cells;
     status_.region = result.stats.region_cells > 0;
     ++status_.phase1_meshes;
-    return result;
 }
 
 bool Pipeline::keeps_moved_mesh(const Mesh& fresh) const {
@@ -231,13 +252,35 @@ Mesh Pipeline::fit_to_budget(Mesh mesh, const WorkBudget& budget) {
     return mesh;
 }
 
-void Pipeline::install(Mesh mesh, const WorkBudget& budget) {
+void Pipeline::install(Mesh mesh, const WorkBudget& budget, bool sliced) {
     if (budget.cancelled()) return;
     shadow_.reset();
     canonical_pending_ = false;
     installed_ = mesh;
-    Mesh root = fit_to_budget(std::move(mesh), budget);
-    if (budget.cancelled()) return;
+    std::vector<std::uint8_t> faces = box_faces(mesh, settings_.phase1.box);
+    const std::optional<std::size_t> limit = settings_.refine.constraint.triangle_limit();
+    simplifying_ = std::make_unique<Simplification>(std::move(mesh), std::move(faces),
+                                                    limit.value_or(SIZE_MAX));
+    // The first mesh must be there after the first step; a later one may take several.
+    continue_install(sliced && refiner_ ? budget : WorkBudget(budget.cancel_flag()));
+}
+
+bool Pipeline::continue_install(const WorkBudget& budget) {
+    if (!simplifying_->advance(budget)) {
+        if (budget.cancelled()) simplifying_.reset();
+        return false;
+    }
+    const SimplifyReport report = simplifying_->report();
+    Mesh root = simplifying_->take();
+    simplifying_.reset();
+    status_.budget_unreachable = !report.reached;
+    status_.minimum_triangles = report.reached ? 0 : report.triangles;
+    if (root.neighbours.empty()) build_adjacency(root);  // simplified: compacted
+    set_roots(std::move(root));
+    return true;
+}
+
+void Pipeline::set_roots(Mesh root) {
     if (!refiner_) {
         refiner_ = std::make_unique<Refiner>(field_, root, settings_.refine);
     } else {
@@ -249,7 +292,9 @@ void Pipeline::set_field(std::shared_ptr<const Field> field) {
     if (!field) throw std::invalid_argument("Pipeline::set_field: null field");
     field_ = std::move(field);
     phase1_ = std::make_unique<Polygonizer>(field_, settings_.phase1);
+    final_mesh_.reset();
     shadow_.reset();
+    simplifying_.reset();
     canonical_pending_ = false;
     classified_at_last_mesh_ = 0;
     status_.resolving = true;
@@ -269,7 +314,7 @@ void Pipeline::set_constraint(Constraint constraint) {
     // A budget below the phase-1 mesh's (simplified) triangles: simplify it again. (A higher one
     // is reached by refining from the roots as they are.)
     const std::optional<std::size_t> limit = settings_.refine.constraint.triangle_limit();
-    if (limit && installed_ && refiner_->root_topology().triangles > *limit) {
+    if (installed_ && (simplifying_ || (limit && refiner_->root_topology().triangles > *limit))) {
         install(*installed_, WorkBudget{});
         return;
     }

@@ -12,9 +12,10 @@
 // `restarted`). From then on the refiner splits and merges until the constraint is met.
 //
 // The triangle budget is a bound at every step: a phase-1 mesh over it is simplified to it with
-// topology-preserving collapses first. Where no mesh of that topology fits (a surface with more
-// components or handles than the budget has triangles for), the mesh is the smallest those
-// collapses reach, and status().budget_unreachable says so.
+// topology-preserving collapses first (after the first mesh, over as many steps as that takes,
+// the mesh shown so far staying until then: no step runs for seconds). Where no mesh of that
+// topology fits (a surface with more components or handles than the budget has triangles for), the
+// mesh is the smallest those collapses reach, and status().budget_unreachable says so.
 //
 // A new version of the function (set_field) moves the vertices onto the new surface at once (a
 // slider's surface glides), while phase 1 runs again for the new function; when it is done, the
@@ -36,6 +37,7 @@
 #include <optional>
 
 #include "mesh/mesh.h"
+#include "mesh/simplify.h"
 #include "mesh/topology.h"
 #include "polygonize/polygonizer.h"
 #include "refine/refiner.h"
@@ -143,7 +145,14 @@ class Pipeline {
     void advance_phase1(const WorkBudget& budget);
     void finish_phase1(const WorkBudget& budget);
     PolygonizeResult phase1_mesh(const WorkBudget& budget);
-    void install(Mesh mesh, const WorkBudget& budget);
+    void record_phase1_mesh(const PolygonizeResult& result);
+    /// Makes `mesh` (a phase-1 mesh) the refiner's roots, simplified to the budget first where
+    /// it is over it: at once, or (`sliced`) over this and the next steps, the refiner showing
+    /// its mesh until then.
+    void install(Mesh mesh, const WorkBudget& budget, bool sliced = false);
+    /// Goes on with the simplification install() started; true once the roots are installed.
+    bool continue_install(const WorkBudget& budget);
+    void set_roots(Mesh root);
     Mesh fit_to_budget(Mesh mesh, const WorkBudget& budget);
     bool keeps_moved_mesh(const Mesh& fresh) const;
     void refine(PipelineStep& out, const StepBudget& budget);
@@ -159,6 +168,8 @@ class Pipeline {
     bool canonical_pending_ = false;  // installed_ is to replace a kept moved mesh
     RefineCounters retired_counters_;
     std::optional<Mesh> installed_;  // the last phase-1 mesh installed, before simplification
+    std::unique_ptr<Simplification> simplifying_;  // installed_ on its way to the refiner
+    std::optional<PolygonizeResult> final_mesh_;   // phase 1's, made, to install next step
     std::size_t classified_at_last_mesh_ = 0;
     bool field_changing_ = false;  // set_field: phase 1 of the new function decides the topology
     PipelineStatus status_;

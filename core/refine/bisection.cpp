@@ -35,18 +35,43 @@ bool Refiner::Impl::plan_split(std::uint32_t t, SplitPlan& plan) {
     }
 }
 
-bool Refiner::Impl::folds(std::uint32_t t, const glm::dvec3& m) const {
-    if (t == kNone) return false;
+namespace {
+
+/// A triangle of geometric normal `n` stands clearly against the surface's normals at its
+/// corners (their sum): the angle between them is over about 104 degrees (cosine below -0.25).
+/// Marching Cubes can stand a triangle nearly across the surface where the lattice barely cuts a
+/// ridge (cosine near 0, either sign); only such clear folds are inside out.
+bool clear_fold(const glm::dvec3& n, const glm::dvec3& corner_normals) {
+    return glm::dot(n, corner_normals) < -0.25 * glm::length(n) * glm::length(corner_normals);
+}
+
+}  // namespace
+
+Refiner::Impl::SplitCorners Refiner::Impl::split_corners(std::uint32_t t) const {
     const Triangle& T = triangles_[t];
-    const glm::dvec3 a = position(t, T.base), b = position(t, T.base + 1),
-                     c = position(t, T.base + 2);
-    const glm::dvec3 parent = glm::cross(b - a, c - a);
-    for (const auto& [p, q] : {std::pair{a, m}, std::pair{m, b}}) {
-        const glm::dvec3 child = glm::cross(q - p, c - p);
-        const double longest =
-            std::max({glm::dot(q - p, q - p), glm::dot(c - q, c - q), glm::dot(p - c, p - c)});
+    return {position(t, T.base), position(t, T.base + 1), position(t, T.base + 2),
+            normal(t, T.base),   normal(t, T.base + 1),   normal(t, T.base + 2)};
+}
+
+bool Refiner::Impl::folds(const SplitCorners& k, const glm::dvec3& m, const glm::dvec3& m_normal) {
+    const glm::dvec3 parent = glm::cross(k.b - k.a, k.c - k.a);
+    const glm::dvec3 parent_normals = k.na + k.nb + k.nc;
+    const bool parent_faces_out = glm::dot(parent, parent_normals) > 0.0;
+    const bool parent_folded = clear_fold(parent, parent_normals);
+    const std::array<std::array<glm::dvec3, 2>, 2> halves{{{k.a, m}, {m, k.b}}};
+    const std::array<glm::dvec3, 2> half_normals{k.na + m_normal + k.nc, m_normal + k.nb + k.nc};
+    for (int h = 0; h < 2; ++h) {
+        const auto& [p, q] = halves[h];
+        const glm::dvec3 child = glm::cross(q - p, k.c - p);
+        const double longest = std::max(
+            {glm::dot(q - p, q - p), glm::dot(k.c - q, k.c - q), glm::dot(p - k.c, p - k.c)});
         // Flipped against the parent, or of zero area (|cross| <= 1e-14 longest^2).
         if (!(glm::dot(child, parent) > 0.0) || glm::length(child) <= 1e-14 * longest) return true;
+        // On a coarse (simplified) mesh a child can keep its parent's side yet face the
+        // surface's inside: a parent facing the way its corners' normals do (towards f > 0) gets
+        // no child that does not, and no split makes a clear fold where there was none.
+        if (parent_faces_out && !(glm::dot(child, half_normals[h]) > 0.0)) return true;
+        if (!parent_folded && clear_fold(child, half_normals[h])) return true;
     }
     return false;
 }
@@ -65,15 +90,30 @@ bool Refiner::Impl::prepare(const SplitPlan& plan) {
         Triangle& T = triangles_[t];
         // The split vertex must not fold the children over (the surface turns sharply between
         // the base edge's ends) nor make one of zero area.
-        const std::uint32_t partner = i + 1 == plan.chain.size() ? plan.partner : kNone;
-        if (!T.candidate_refused && (folds(t, T.candidate) || folds(partner, T.candidate)))
-            T.candidate_refused = true;
+        if (!T.candidate_refused && split_folds(plan, i)) T.candidate_refused = true;
         if (!T.candidate_refused) continue;
         ok = false;
         ++counters_.refused_vertices;
         block(t);  // kept, unsplit, until the function changes
     }
     return ok;
+}
+
+bool Refiner::Impl::split_folds(const SplitPlan& plan, std::size_t i) const {
+    const std::uint32_t t = plan.chain[i];
+    const Triangle& T = triangles_[t];
+    const SplitCorners own = split_corners(t);
+    if (folds(own, T.candidate, T.candidate_normal)) return true;
+    if (i + 1 < plan.chain.size()) {
+        // The other half of the diamond does not exist yet: it is the child of chain[i + 1]'s
+        // split across t's base edge, with that split's vertex as its apex.
+        const Triangle& next = triangles_[plan.chain[i + 1]];
+        const SplitCorners across{own.b,  own.a,  next.candidate,
+                                  own.nb, own.na, next.candidate_normal};
+        return folds(across, T.candidate, T.candidate_normal);
+    }
+    return plan.partner != kNone &&
+           folds(split_corners(plan.partner), T.candidate, T.candidate_normal);
 }
 
 void Refiner::Impl::execute(const SplitPlan& plan) {

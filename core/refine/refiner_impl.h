@@ -193,6 +193,9 @@ class Refiner::Impl {
     const glm::dvec3& position(std::uint32_t t, int corner) const {
         return vertices_[triangles_[t].v[corner % 3]].position;
     }
+    const glm::dvec3& normal(std::uint32_t t, int corner) const {
+        return vertices_[triangles_[t].v[corner % 3]].normal;
+    }
     double base_length(std::uint32_t t) const {
         const Triangle& T = triangles_[t];
         return glm::length(position(t, T.base + 1) - position(t, T.base));
@@ -233,8 +236,18 @@ class Refiner::Impl {
     /// Projects the split vertices of the plan; false (and the triangles without one moved to
     /// the blocked queue) when some has none on the surface inside the box.
     bool prepare(const SplitPlan& plan);
-    /// Bisecting t's base edge at m would flip a child against t, or make one of zero area.
-    bool folds(std::uint32_t t, const glm::dvec3& m) const;
+    /// A triangle about to be bisected: its base edge a-b, apex c, and their normals.
+    struct SplitCorners {
+        glm::dvec3 a, b, c, na, nb, nc;
+    };
+    SplitCorners split_corners(std::uint32_t t) const;
+    /// Bisecting the base edge at m (normal m_normal) would flip a child against the triangle,
+    /// turn one against its corners' normals where the triangle faced along its own, make a
+    /// clear fold where there was none, or make a child of zero area.
+    static bool folds(const SplitCorners& triangle, const glm::dvec3& m,
+                      const glm::dvec3& m_normal);
+    /// folds() for both halves of the diamond chain[i]'s split vertex bisects.
+    bool split_folds(const SplitPlan& plan, std::size_t i) const;
     void execute(const SplitPlan& plan);
     void bisect(std::uint32_t t, std::uint32_t partner);
     std::uint32_t make_child(std::uint32_t record, std::array<std::uint32_t, 3> v,

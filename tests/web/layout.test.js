@@ -5,7 +5,7 @@
 import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
-import { canvasShot, convergedOn, typeEquation, viewerForTests, waitForSnapshot } from './browser.js';
+import { boxCornersOnScreen, canvasShot, convergedOn, typeEquation, viewerForTests, waitForSnapshot } from './browser.js';
 import { coloredFraction } from './pixels.js';
 
 const PHONE = { width: 390, height: 844 };
@@ -41,6 +41,8 @@ test('on a 390 px screen the view and the panel are both usable', async () => {
   await page.getByRole('button', { name: 'Hide panel' }).click();
   const full = await box(page.locator('#canvas-host canvas'));
   assert.ok(full.height >= PHONE.height - 2, `hidden panel: the view is ${full.height} px high`);
+  const corners = await boxCornersOnScreen(page);
+  assert.ok(corners.every(([x]) => Math.abs(x) <= 1), `the taller view keeps the box's width on screen: ${JSON.stringify(corners)}`);
   await canvasShot(page, 'phone-3-panel-hidden');
   await page.getByRole('button', { name: 'Show panel' }).click();
   assert.ok(await equation.isVisible());

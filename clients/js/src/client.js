@@ -238,19 +238,31 @@ export class IsomeshClient extends Emitter {
 
   // ---- connection and reconnection ---------------------------------------------------------------
 
-  /** Opens a WebSocket; `opened`/`failed` settle the attempt. */
+  /**
+   * Opens a WebSocket; `opened` or `failed` settles the attempt, once: a socket that cannot
+   * connect fires `error` and then `close` (browsers and `ws` alike), and each call of `failed`
+   * would schedule its own next attempt, doubling the attempts in flight with every failure.
+   */
   #open(opened, failed) {
     const socket = new this.options.WebSocket(routedUrl(this.url, this.route));
     this.currentSocket = socket;
     let open = false;
+    let settled = false;
+    const fail = (error) => {
+      if (settled) return;
+      settled = true;
+      failed(error);
+    };
     socket.binaryType = 'arraybuffer';
     socket.onopen = () => {
+      if (settled) return;
+      settled = true;
       open = true;
       this.connected = true;
       opened();
     };
     socket.onerror = () => {
-      if (!open) failed(new IsomeshError('unavailable', 'WebSocket connection failed'));
+      if (!open) fail(new IsomeshError('unavailable', 'WebSocket connection failed'));
     };
     socket.onmessage = (event) => {
       if (socket === this.currentSocket) this.#receive(event.data);
@@ -258,7 +270,7 @@ export class IsomeshClient extends Emitter {
     socket.onclose = (event) => {
       if (socket !== this.currentSocket) return;
       if (!open) {
-        failed(new IsomeshError('unavailable', `WebSocket connection failed (${event.code})`));
+        fail(new IsomeshError('unavailable', `WebSocket connection failed (${event.code})`));
         return;
       }
       this.#lost(event);

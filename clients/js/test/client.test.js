@@ -274,6 +274,51 @@ test('closed with reason moved reconnects; a session that cannot be resubscribed
   client.close();
 });
 
+/** A server that is down: each socket fails as browsers and `ws` report it, `error` then `close`. */
+class RefusedSocket extends FakeSocket {
+  static opened = 0;
+  static refusing = true;
+
+  constructor(url) {
+    super(url);
+    ++RefusedSocket.opened;
+    if (!RefusedSocket.refusing) return;
+    Object.defineProperty(this, 'onopen', { set: () => {}, get: () => undefined });
+    queueMicrotask(() => {
+      this.onerror?.({});
+      this.onclose?.({ code: 1006, reason: '' });
+    });
+  }
+}
+
+test('a server that stays down is tried one attempt at a time (error then close count once)', async (t) => {
+  RefusedSocket.refusing = false;
+  const client = await connect('ws://h/ws', { WebSocket: RefusedSocket, decoder: new FakeMeshDecoder(), reconnectDelaysMs: [2], maxReconnectAttempts: 1000 });
+  const first = FakeSocket.last;
+  // Mocked timers: each 3 ms tick fires the pending attempt (2 ms ± 20 %), whose socket fails at
+  // once; one next attempt per failure gives one attempt per tick, two would double every tick.
+  t.mock.timers.enable({ apis: ['setTimeout'] });
+  const settle = () => new Promise((resolve) => setImmediate(resolve));
+  RefusedSocket.refusing = true;
+  RefusedSocket.opened = 0;
+  first.onclose({ code: 1006, reason: '' });
+  for (let tick = 1; tick <= 10; ++tick) {
+    t.mock.timers.tick(3);
+    await settle();
+    assert.equal(RefusedSocket.opened, tick, `one attempt per delay, not ${RefusedSocket.opened} after ${tick}`);
+  }
+  RefusedSocket.refusing = false;
+  t.mock.timers.tick(3);
+  await settle();
+  assert.ok(client.connected);
+  assert.equal(client.reconnects, 1);
+  const opened = RefusedSocket.opened;
+  t.mock.timers.tick(100);
+  await settle();
+  assert.equal(RefusedSocket.opened, opened, 'no attempt left running once connected');
+  client.close();
+});
+
 test('requests made while disconnected wait for the new connection; close() ends it all', async () => {
   const client = await connect('ws://h/ws', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder(), reconnectDelaysMs: [50] });
   const first = FakeSocket.last;

@@ -2,17 +2,20 @@
 // list each, with its own session), and the values they share, as GeoGebra shares them between
 // objects: the parameters (one slider per name, whatever surfaces use it), the view box and the
 // detail constraints. It turns what the user does into Surface calls and shows what the surfaces
-// report: the rows' progress and messages, the sliders, the status line.
+// report: the rows' progress and messages, the sliders, the status line. The connection
+// (connection.js) reconnects by itself and keeps every row's session.
 
-import { connect } from 'isomesh-client';
+import { RECONNECT_DELAYS_MS, connect } from 'isomesh-client';
 
-import { NO_SURFACE_MESSAGE, EMPTY_MESSAGE, prepareEquation } from './equation_check.js';
+import { Connection } from './connection.js';
+import { EMPTY_MESSAGE, prepareEquation } from './equation_check.js';
+import { endedMessage, outcomeNotes, uncertain } from './outcome.js';
 import { parameterNames } from './parameters.js';
-import { RECONNECT_MS, Surface } from './surface.js';
+import { Surface } from './surface.js';
 import { MAX_SURFACES } from './url_state.js';
 
 export const PALETTE = ['#3d7fd6', '#d9553d', '#3f9e4d', '#8e5bd0', '#1f9fa5', '#c98a1b', '#d6457e', '#5f6b7a'];
-const STATUS_ORDER = ['disconnected', 'connecting', 'meshing', 'refining', 'paused', 'converged'];
+const STATUS_ORDER = ['disconnected', 'connecting', 'meshing', 'resolving', 'refining', 'paused', 'converged', 'ended'];
 
 export class App {
   /**
@@ -27,10 +30,13 @@ export class App {
    */
   constructor({ url, decoder, viewer, objects, sliders, panel, state }) {
     Object.assign(this, { url, decoder, viewer, objects, sliders, panel });
-    this.client = null;
-    this.connection = 'connecting'; // 'connecting' | 'open' | 'disconnected'
-    this.connectionDetail = '';
-    this.reconnects = 0;
+    this.connection = new Connection({
+      connect,
+      url,
+      options: { decoder, deferFrames: true },
+      delaysMs: RECONNECT_DELAYS_MS,
+      onChange: () => this.#refresh(),
+    });
     this.parameters = { ...(state.parameters ?? {}) };
     this.box = state.box;
     this.constraints = { ...(state.constraints ?? {}) };
@@ -45,22 +51,19 @@ export class App {
     for (const s of state.surfaces ?? []) this.addSurface(s);
   }
 
+  /** Connects (trying until the server answers) and gives every row its session. */
   async start() {
-    this.connection = 'connecting';
     this.#refresh();
-    try {
-      this.client = await connect(this.url, { decoder: this.decoder, deferFrames: true });
-    } catch (error) {
-      this.#disconnected(error.message);
-      return;
-    }
-    this.reconnects = 0;
-    this.connection = 'open';
-    this.connectionDetail = '';
-    this.client.on('close', () => this.#disconnected('connection closed'));
-    this.client.on('error', (error) => console.warn('isomesh:', error));
-    for (const row of this.rows) row.surface.attach(this.client);
+    const client = await this.connection.open();
+    if (!client) return;
+    client.on('error', (error) => console.warn('isomesh:', error));
+    for (const row of this.rows) row.surface.attach(client);
     this.#refresh();
+  }
+
+  /** The connection's client once open (the same object across reconnections), else null. */
+  get client() {
+    return this.connection.client;
   }
 
   /** The values every surface shares, for a new session. */
@@ -88,7 +91,7 @@ export class App {
     });
     this.rows.push(row);
     this.activeRow ??= row;
-    if (this.client && !this.client.closed) row.surface.attach(this.client);
+    if (this.client) row.surface.attach(this.client);
     if (focus) {
       row.view.input.focus();
       this.activeRow = row;
@@ -151,9 +154,10 @@ export class App {
     this.#stateChanged();
   }
 
+  /** A box the user typed: the camera follows it (as GeoGebra's view follows its axes' ranges). */
   setBox(box) {
     this.box = box;
-    this.viewer.setBox(box);
+    this.viewer.setBox(box, { frame: 'keep' });
     for (const row of this.rows) row.surface.setBox(box);
     this.#stateChanged();
   }
@@ -219,7 +223,7 @@ export class App {
 
   /** The status line's state: the most pressing of the rows'. */
   get status() {
-    if (this.connection !== 'open') return this.connection;
+    if (this.connection.state !== 'open') return this.connection.state;
     const states = this.rows.map((r) => r.surface.status);
     const live = states.filter((s) => STATUS_ORDER.includes(s));
     if (live.length > 0) return STATUS_ORDER.find((s) => live.includes(s));
@@ -241,7 +245,7 @@ export class App {
     const errors = this.rows.map((r) => r.surface.errorMax).filter((e) => e !== null);
     return {
       status: this.status,
-      detail: this.connectionDetail,
+      detail: this.connection.detail,
       triangles: this.rows.reduce((sum, r) => sum + r.surface.triangles, 0),
       errorMax: errors.length > 0 ? Math.max(...errors) : null,
       bytesReceived: this.client?.bytesReceived ?? 0,
@@ -295,29 +299,21 @@ export class App {
 
   #showRow(row) {
     const s = row.surface;
-    const status = s.status;
-    row.view.setProgress({ status, triangles: s.triangles, budget: s.session?.state?.constraints?.triangles ?? 0 });
+    const finished = s.finished;
+    const budget = s.session?.state?.constraints?.triangles ?? 0;
+    row.view.setProgress({ status: s.status, triangles: s.triangles, budget, uncertain: uncertain(finished) });
     const error = row.localError ?? s.error;
     if (error !== row.shownError) {
       row.shownError = error;
       if (error) row.view.showError(error.text ?? '', error.message, error.column ?? null);
       else row.view.clearError();
     }
-    row.view.setNotes(s.empty && !error ? [...row.notes, NO_SURFACE_MESSAGE] : row.notes);
+    const said = s.ended ? [endedMessage(s.ended)] : outcomeNotes(finished, s.triangles, budget);
+    row.view.setNotes(error ? row.notes : [...row.notes, ...said]);
   }
 
   #stateChanged() {
     this.onStateChange?.();
     this.#refresh();
-  }
-
-  #disconnected(reason) {
-    this.client = null;
-    this.connection = 'disconnected';
-    this.connectionDetail = reason;
-    for (const row of this.rows) row.surface.detach();
-    this.#refresh();
-    const delay = RECONNECT_MS[Math.min(this.reconnects++, RECONNECT_MS.length - 1)];
-    setTimeout(() => this.start(), delay);
   }
 }

@@ -1,5 +1,6 @@
 // What the viewer checks and rewrites in an equation before sending it, so that no input ends
-// silently. Pure: no DOM.
+// silently. Pure: no DOM. What the server finds (no surface in the box, a region rather than a
+// surface) is the server's to say: outcome.js words it.
 //
 // - An empty equation is refused with a message (an empty Enter does nothing otherwise).
 // - Capital X, Y, Z are the coordinates, as GeoGebra reads them: the server's language is
@@ -12,8 +13,6 @@
 import { TOKEN } from './parameters.js';
 
 export const EMPTY_MESSAGE = 'Type an equation in x, y and z, for example x^2+y^2+z^2=4, then press Enter.';
-export const NO_SURFACE_MESSAGE =
-  'No surface in the view box: the equation has no solution there. Check the values (a negative radius² has no sphere) or enlarge the box.';
 
 /**
  * {ok: false, message} for an equation that cannot be sent, else {ok: true, expression, notes}:

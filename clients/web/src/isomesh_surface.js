@@ -14,19 +14,26 @@
 //   server      the server's WebSocket URL (default: /ws on the server this script came from)
 // Events: `converged` and `error` (detail: the element's snapshot()). The element fills its box
 // (display: block, 300 px high unless styled); orbit, zoom and pan as in the viewer.
+// The status line also appears, whatever `status` says, for what the user should know: an error,
+// no surface in the box, a region rather than a surface, a budget below what the shape needs, a
+// lost connection (the client library reconnects and the surface keeps its session).
 
-import { connect, loadDracoDecoder } from 'isomesh-client';
+import { RECONNECT_DELAYS_MS, connect, loadDracoDecoder } from 'isomesh-client';
 import dracoWasmUrl from 'draco3d/draco_decoder.wasm?url';
 
+import { Connection } from './connection.js';
 import { prepareEquation } from './equation_check.js';
+import { endedMessage, outcomeNotes, uncertain } from './outcome.js';
 import { parameterAttributes } from './parameters.js';
 import { FramePump } from './frame_pump.js';
-import { RECONNECT_MS, Surface } from './surface.js';
+import { Surface } from './surface.js';
 import { validBox } from './url_state.js';
 import { DARK_THEME, LIGHT_THEME, Viewer } from './viewer.js';
 
 const DEFAULT_BOX = [-3, 3, -3, 3, -3, 3];
 const OWN_ATTRIBUTES = new Set(['equation', 'parameters', 'box', 'budget', 'color', 'colormode', 'axes', 'grid', 'status', 'server']);
+/** The status line's words for a surface state, where its name is not plain enough. */
+const STATUS_WORDS = { meshing: 'finding the shape…', resolving: 'finding the shape…' };
 
 let decoderPromise = null;
 const sharedDecoder = () => (decoderPromise ??= loadDracoDecoder({ locateFile: () => dracoWasmUrl }));
@@ -48,8 +55,9 @@ const STYLE = `
 .status { position: absolute; left: 6px; bottom: 6px; padding: 2px 8px; border-radius: 5px;
   font: 12px system-ui, sans-serif; background: rgba(255,255,255,0.85); color: #374151; pointer-events: none; }
 .status.error { color: #c62828; }
+.status.note { color: #8a5300; }
 .status[hidden] { display: none; }
-@media (prefers-color-scheme: dark) { .status { background: rgba(28,32,39,0.85); color: #d5dae1; } .status.error { color: #ff7b72; } }
+@media (prefers-color-scheme: dark) { .status { background: rgba(28,32,39,0.85); color: #d5dae1; } .status.error { color: #ff7b72; } .status.note { color: #e3b341; } }
 `;
 
 export class IsomeshSurfaceElement extends HTMLElement {
@@ -57,9 +65,8 @@ export class IsomeshSurfaceElement extends HTMLElement {
     super();
     this.viewer = null;
     this.surface = null;
-    this.client = null;
+    this.connection = null;
     this.sent = null; // {expression, parameters, box, budget} last sent
-    this.reconnects = 0;
     this.gone = false;
     this.convergedVersion = null;
   }
@@ -102,10 +109,15 @@ export class IsomeshSurfaceElement extends HTMLElement {
     this.observer?.disconnect();
     document.removeEventListener('visibilitychange', this.onVisibility);
     this.surface?.close();
-    this.client?.close();
+    this.connection?.stop();
     this.viewer?.dispose();
     this.viewer = null;
-    this.client = null;
+    this.connection = null;
+  }
+
+  /** The connection's client once open, else null. */
+  get client() {
+    return this.connection?.client ?? null;
   }
 
   /** The state, as the viewer's window.isomesh.snapshot() gives it for one surface. */
@@ -113,29 +125,26 @@ export class IsomeshSurfaceElement extends HTMLElement {
     return this.surface?.snapshot() ?? null;
   }
 
+  /** Connects (trying until the server answers); the client library then reconnects by itself. */
   async #connect() {
+    let decoder;
     try {
-      const decoder = await sharedDecoder();
-      const client = await connect(this.getAttribute('server') ?? defaultServer(), { decoder, deferFrames: true });
-      if (this.gone) {
-        client.close();
-        return;
-      }
-      this.client = client;
-      this.reconnects = 0;
-      client.on('close', () => this.#lost('connection closed'));
-      this.surface.attach(client);
+      decoder = await sharedDecoder();
     } catch (error) {
-      this.#lost(error.message);
+      this.#showStatus(`cannot decode meshes: ${error.message}`, 'error');
+      return;
     }
-  }
-
-  #lost(reason) {
     if (this.gone) return;
-    this.client = null;
-    this.surface.detach();
-    this.#showStatus(`disconnected (${reason})`, true);
-    setTimeout(() => !this.gone && this.#connect(), RECONNECT_MS[Math.min(this.reconnects++, RECONNECT_MS.length - 1)]);
+    const connection = new Connection({
+      connect,
+      url: this.getAttribute('server') ?? defaultServer(),
+      options: { decoder, deferFrames: true },
+      delaysMs: RECONNECT_DELAYS_MS,
+      onChange: () => this.#changed('status'),
+    });
+    this.connection = connection;
+    const client = await connection.open();
+    if (client && !this.gone) this.surface.attach(client);
   }
 
   #attributesChanged() {
@@ -147,7 +156,7 @@ export class IsomeshSurfaceElement extends HTMLElement {
     this.view.setColor(this.getAttribute('color') ?? '#3d7fd6');
     this.#applyDisplay();
     if (!prepared.ok) {
-      this.#showStatus(prepared.message, true);
+      this.#showStatus(prepared.message, 'error');
       return;
     }
     if (!before || before.expression !== now.expression) {
@@ -184,15 +193,22 @@ export class IsomeshSurfaceElement extends HTMLElement {
 
   #changed(what) {
     const s = this.surface;
+    if (!s) return;
     if (what === 'session') this.view.showSlots(s.session?.mesh.slots ?? null);
     this.viewer?.requestRender();
-    if (s.error) {
-      this.#showStatus(s.error.message, true);
+    const finished = s.finished;
+    const notes = s.ended ? [endedMessage(s.ended)] : outcomeNotes(finished, s.triangles, s.session?.state?.constraints?.triangles ?? 0);
+    const connection = this.connection;
+    if (connection && connection.state === 'disconnected') {
+      this.#showStatus(`disconnected (${connection.detail}) · ${s.triangles} triangles`, 'note');
+    } else if (s.error) {
+      this.#showStatus(s.error.message, 'error');
       if (what === 'error') this.dispatchEvent(new CustomEvent('error', { detail: this.snapshot() }));
-    } else if (s.empty) {
-      this.#showStatus('No surface in the box', true);
+    } else if (notes.length > 0) {
+      this.#showStatus(notes[0], 'note');
     } else {
-      this.#showStatus(`${s.triangles} triangles · ${s.status}`, false);
+      const approximate = uncertain(finished) ? ' · approximate in places' : '';
+      this.#showStatus(`${s.triangles} triangles · ${STATUS_WORDS[s.status] ?? s.status}${approximate}`, 'info');
     }
     const version = s.session ? `${s.session.id}:${s.session.state?.version}` : null;
     if (s.status === 'converged' && version !== this.convergedVersion) {
@@ -201,10 +217,12 @@ export class IsomeshSurfaceElement extends HTMLElement {
     }
   }
 
-  #showStatus(text, important) {
+  /** `kind`: 'error' or 'note' (always shown), 'info' (shown with the `status` attribute). */
+  #showStatus(text, kind) {
     this.statusLine.textContent = text;
-    this.statusLine.classList.toggle('error', important);
-    this.statusLine.hidden = !important && !this.hasAttribute('status');
+    this.statusLine.classList.toggle('error', kind === 'error');
+    this.statusLine.classList.toggle('note', kind === 'note');
+    this.statusLine.hidden = kind === 'info' && !this.hasAttribute('status');
   }
 }
 

@@ -21,6 +21,8 @@ import { COLOR_MODES, DEFAULT_SHOW, decodeState, encodeState } from './url_state
 import { DARK_THEME, LIGHT_THEME, Viewer } from './viewer.js';
 
 const STORAGE_KEY = 'isomesh.viewer.scene';
+/** The status line's words for states whose name is not plain enough. */
+const STATUS_WORDS = { resolving: 'finding the shape', ended: 'session ended' };
 const URL_WRITE_DELAY_MS = 250;
 const $ = (selector) => document.querySelector(selector);
 
@@ -164,7 +166,7 @@ function showStatus() {
   if (s.firstMeshMs !== null) parts.push(part(`first mesh ${s.firstMeshMs.toFixed(1)} ms`, true));
   const state = document.createElement('span');
   state.className = `state-${s.status}`;
-  state.textContent = s.detail ? `${s.status} (${s.detail})` : s.status;
+  state.textContent = `${STATUS_WORDS[s.status] ?? s.status}${s.detail ? ` (${s.detail})` : ''}`;
   statusLine.replaceChildren(...parts, state);
 }
 

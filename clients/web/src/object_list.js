@@ -2,7 +2,10 @@
 // the surface's colour when shown), its equation (a text input named "Equation"; Enter sends it),
 // a colour picker and a delete button; under it a progress line while the surface is resolved,
 // the server's error with the offending character marked, and notes on how the equation was
-// read. It holds no session logic: it shows what it is told and reports what the user does.
+// read and what the server found. It holds no session logic: it shows what it is told and reports
+// what the user does.
+
+import { UNCERTAIN_TITLE } from './outcome.js';
 
 /**
  * @param {HTMLOListElement} list
@@ -66,7 +69,10 @@ export class ObjectRow {
     this.progressBar.className = 'bar';
     this.progressText = document.createElement('span');
     this.progressText.className = 'text';
-    this.progress.append(this.progressBar, this.progressText);
+    this.uncertainMark = document.createElement('span');
+    this.uncertainMark.className = 'uncertain';
+    this.uncertainMark.title = UNCERTAIN_TITLE;
+    this.progress.append(this.progressBar, this.progressText, this.uncertainMark);
 
     this.errorBox = document.createElement('div');
     this.errorBox.className = 'equation-error';
@@ -163,24 +169,30 @@ export class ObjectRow {
   }
 
   /**
-   * The progress line: {status, triangles, budget}. While meshing, a moving bar; while refining,
-   * the share of the budget reached; converged: the triangle count alone.
+   * The progress line: {status, triangles, budget, uncertain}. While the shape is being found, a
+   * moving bar; while refining, the share of the budget reached; converged: the triangle count
+   * alone, and a discreet mark when the server could not prove the shape everywhere.
    */
-  setProgress({ status, triangles, budget }) {
+  setProgress({ status, triangles, budget, uncertain = false }) {
     const count = `${triangles} triangles`;
     const text = {
       empty: 'Type an equation and press Enter',
       error: '',
+      ended: 'ended',
       connecting: 'connecting…',
-      meshing: 'resolving…',
+      disconnected: triangles > 0 ? `reconnecting… · ${count}` : 'reconnecting…',
+      meshing: 'finding the shape…',
+      resolving: `finding the shape… · ${count}`,
       refining: `refining · ${count}`,
       converged: count,
       paused: `paused · ${count}`,
     }[status];
     this.progressText.textContent = text ?? status;
     this.progress.dataset.status = status;
+    this.uncertainMark.textContent = uncertain && status === 'converged' ? ' · approximate in places' : '';
     const fraction = status === 'refining' && budget > 0 ? Math.min(1, triangles / budget) : status === 'converged' ? 1 : 0;
-    this.progressBar.style.width = status === 'meshing' || status === 'connecting' ? '' : `${(100 * fraction).toFixed(1)}%`;
+    const sweeping = ['meshing', 'resolving', 'connecting', 'disconnected'].includes(status);
+    this.progressBar.style.width = sweeping ? '' : `${(100 * fraction).toFixed(1)}%`;
   }
 }
 

@@ -9,15 +9,27 @@
 //
 // Values shared by every surface (parameters, box, constraints) are not kept here: `shared()`
 // returns them when a session is created.
+//
+// The session outlives the connection: when it drops, the client library reconnects and
+// subscribes again (same session id, same mesh; clients/js README, "Reconnection") and edits made
+// meanwhile wait for it. A new session is made only when the server says the old one is gone:
+// `closed` with reason `lost` (it could not be subscribed again: a server without a store
+// restarted) or `shutdown`, or an `unknown_session` error answering a request. A session the
+// server ended on purpose (`expired`: no request for its idle time; `closed` by another client)
+// is not made again at once: the surface says so ('ended') and the next edit or Enter makes it.
 
 import { missingParameters, parameterNames, valuesFor } from './parameters.js';
 
 export const NEXT_UPDATE_WAIT_MS = 250;
-/** Delays before reconnecting after a lost connection: the 1st, 2nd... attempt (then the last). */
-export const RECONNECT_MS = [500, 1000, 2000, 5000, 10000];
+/** Wait before sending again a request the server could not take (store down, timed out). */
+export const RETRY_MS = 2000;
+/** Error codes that say "not now" rather than "not this": the request is made again. */
+const RETRIED = new Set(['timeout', 'closed', 'unavailable', 'store_unavailable']);
+/** Reasons of `closed` that end the session but not the surface: a new session is made. */
+const RECREATED = new Set(['lost', 'shutdown']);
 
 /** What a row's progress line says, from the surface's state. */
-export const SURFACE_STATES = ['empty', 'error', 'connecting', 'meshing', 'refining', 'converged', 'paused'];
+export const SURFACE_STATES = ['empty', 'error', 'ended', 'connecting', 'disconnected', 'meshing', 'resolving', 'refining', 'converged', 'paused'];
 
 export class Surface {
   /**
@@ -38,9 +50,13 @@ export class Surface {
     this.pending = null; // fields of the next update
     this.inFlight = false;
     this.waitingFor = null; // {version, timer}: the update answered, its mesh not shown yet
-    this.error = null; // {code, message, column, text} of the last rejected request
+    this.error = null; // {code, message, column, text, transient} of the last rejected request
+    this.retryTimer = null; // a request the server could not take is made again when it fires
+    this.unfollow = null; // stops listening to the client
     this.errorMax = null; // of the current function version only
     this.paused = false;
+    /** The `closed` reason of a session the server ended on purpose, until a new one is made. */
+    this.ended = null;
     /** Function versions whose mesh has been shown: how many times the surface moved. */
     this.versionsShown = 0;
     this.lastShownVersion = 0;
@@ -48,21 +64,14 @@ export class Surface {
     this.journal = [];
   }
 
-  /** Uses `client` (an open IsomeshClient) from now on: creates the session if there is an equation. */
+  /**
+   * Uses `client` (an open IsomeshClient, reconnecting by itself) from now on: creates the
+   * session if there is an equation.
+   */
   attach(client) {
     this.client = client;
+    this.unfollow = client.on('reconnected', () => this.#retry());
     if (this.expression !== '') this.#create();
-  }
-
-  /** The connection is gone: forget the session (a new one is made on the next attach). */
-  detach() {
-    this.client = null;
-    this.session = null;
-    this.creating = false;
-    this.pending = null;
-    this.inFlight = false;
-    this.#stopWaiting();
-    this.onChange(this, 'session');
   }
 
   /** The names the slider panel shows: the server's list once known, else the equation's. */
@@ -100,7 +109,11 @@ export class Surface {
   async setPaused(paused) {
     this.paused = paused;
     if (!this.session) return;
-    await (paused ? this.session.pause() : this.session.resume()).catch((e) => this.#failed(e, {}));
+    const session = this.session;
+    await (paused ? session.pause() : session.resume()).catch((error) => {
+      if (error.code === 'unknown_session') this.#gone(session);
+      else this.#failed(error, {});
+    });
     this.onChange(this, 'status');
   }
 
@@ -110,29 +123,44 @@ export class Surface {
     this.session = null;
     this.expression = '';
     this.#stopWaiting();
+    clearTimeout(this.retryTimer);
+    this.unfollow?.();
     if (session && !session.closed) await session.close().catch(() => {});
   }
 
   // ---- state -----------------------------------------------------------------------------------
 
-  /** 'empty' | 'error' | 'connecting' | 'meshing' | 'refining' | 'converged' | 'paused' */
+  /** One of SURFACE_STATES. */
   get status() {
     const s = this.session;
-    if (!s) {
-      if (this.expression === '') return 'empty';
-      if (this.error && !this.creating) return 'error';
-      return this.client ? 'meshing' : 'connecting';
+    if (this.expression === '' && !s) return 'empty';
+    if (!this.client) return 'connecting';
+    if (!this.client.connected) return 'disconnected'; // the mesh on hand stays shown
+    if (!s && !this.creating) {
+      if (this.error && !this.error.transient) return 'error';
+      if (this.ended) return 'ended';
     }
+    if (!s) return 'meshing';
     if (this.paused) return 'paused';
-    const busy = this.pending || this.inFlight;
-    if (!busy && s.converged) return 'converged'; // a version may converge with no frame
-    if (busy || !s.mesh.synchronized || s.mesh.functionVersion < (s.state?.version ?? 0)) return 'meshing';
-    return 'refining';
+    if (this.finished) return 'converged'; // a version may converge with no frame
+    if (this.#busy || !s.mesh.synchronized || s.mesh.functionVersion < (s.state?.version ?? 0)) return 'meshing';
+    return this.resolving ? 'resolving' : 'refining';
   }
 
-  /** True when the current version is final and has no triangle in the box. */
-  get empty() {
-    return this.status === 'converged' && this.triangles === 0;
+  /** The server's `converged` message when the mesh on hand is final for the latest version, else null. */
+  get finished() {
+    const s = this.session;
+    return s && !this.#busy && s.converged ? s.lastConverged : null;
+  }
+
+  /** True while the server is still finding the current version's shape (a keyframe may replace the mesh). */
+  get resolving() {
+    const p = this.session?.lastProgress;
+    return Boolean(p && p.version === this.session.state?.version && p.resolving);
+  }
+
+  get #busy() {
+    return Boolean(this.pending || this.inFlight);
   }
 
   snapshot() {
@@ -147,6 +175,9 @@ export class Surface {
       errorMax: this.errorMax,
       firstMeshMs: s?.stats.firstMeshMs ?? null,
       versionsShown: this.versionsShown,
+      resolving: this.resolving,
+      outcome: outcomeOf(this.finished),
+      ended: this.ended,
       parameters: { ...(s?.state?.parameters ?? {}) },
       box: s?.state?.box ?? null,
       constraints: s?.state?.constraints ?? null,
@@ -176,16 +207,19 @@ export class Surface {
           continue;
         }
         this.creating = false;
-        if (this.client === client) this.#failed(error, { expression });
+        if (this.expression === '') return; // deleted meanwhile
+        if (RETRIED.has(error.code)) this.#retryLater(error);
+        else this.#failed(error, { expression });
         return;
       }
     }
     this.creating = false;
-    if (this.client !== client || this.expression === '') {
-      session.close().catch(() => {}); // detached or deleted meanwhile
+    if (this.expression === '') {
+      session.close().catch(() => {}); // deleted meanwhile
       return;
     }
     this.session = session;
+    this.ended = null;
     this.error = null;
     this.errorMax = null;
     this.lastShownVersion = 0; // versions count from 1 in every session
@@ -244,6 +278,7 @@ export class Surface {
     session.on('resync', ({ reason }) => this.#note(`resync (${reason})`));
     session.on('firstMesh', () => current() && this.onChange(this, 'status'));
     session.on('progress', (m) => {
+      this.#note(`progress v${m.version} ${m.triangles}${m.resolving ? ' resolving' : ''}`);
       if (!current()) return;
       if (m.version === session.state?.version) this.errorMax = m.error_max;
       this.onChange(this, 'status');
@@ -260,12 +295,56 @@ export class Surface {
       this.error = { code: error.code, message: error.message, column: error.column ?? null, text: this.expression };
       this.onChange(this, 'error');
     });
-    session.on('closed', (m) => {
+    session.on('disconnected', () => current() && this.onChange(this, 'status'));
+    session.on('resubscribed', (state) => {
+      this.#note(`resubscribed v${state.version}`);
       if (!current()) return;
-      this.session = null;
-      this.#note(`closed (${m.reason})`);
-      this.onChange(this, 'session');
+      if (this.paused) session.pause().catch(() => {}); // a rebuilt session is not paused
+      this.onChange(this, 'status');
     });
+    session.on('closed', (m) => {
+      this.#note(`closed (${m.reason})`);
+      if (!current()) return;
+      if (RECREATED.has(m.reason)) {
+        this.#gone(session);
+        return;
+      }
+      if (m.reason !== 'error') this.ended = m.reason; // after `error`, the error says why
+      this.#forget();
+    });
+  }
+
+  /** The session ended; the surface keeps its equation (a later edit makes a new session). */
+  #forget() {
+    this.session = null;
+    this.pending = null;
+    this.#stopWaiting();
+    this.onChange(this, 'session');
+  }
+
+  /** The server no longer has the session: a new one, with the surface's current definition. */
+  #gone(session) {
+    if (this.session !== session) return;
+    this.#forget();
+    this.#create();
+  }
+
+  /** After a reconnection or a wait: makes again what the server could not take. */
+  #retry() {
+    clearTimeout(this.retryTimer);
+    this.retryTimer = null;
+    if (!this.client?.connected || this.expression === '') return;
+    if (this.session) this.#pump();
+    else this.#create();
+  }
+
+  /** The request failed for now (`error.code` in RETRIED): again after RETRY_MS or a reconnection. */
+  #retryLater(error) {
+    const said = error.code === 'unavailable' || error.code === 'store_unavailable'; // the server's words
+    if (said) this.error = { code: error.code, message: error.message, column: null, text: this.expression, transient: true };
+    clearTimeout(this.retryTimer);
+    this.retryTimer = setTimeout(() => this.#retry(), RETRY_MS);
+    this.onChange(this, said ? 'error' : 'status');
   }
 
   #change(fields) {
@@ -283,19 +362,26 @@ export class Surface {
   }
 
   async #pump() {
-    if (this.inFlight || this.waitingFor || !this.session || !this.pending) return;
+    if (this.inFlight || this.waitingFor || this.retryTimer || !this.session || !this.pending) return;
     const session = this.session;
     const fields = this.pending;
     this.pending = null;
     this.inFlight = true;
     try {
       const state = await session.update(fields);
-      if (fields.expression !== undefined) this.error = null;
+      if (fields.expression !== undefined || this.error?.transient) this.error = null;
       if (this.session === session) this.#waitForMesh(state.version);
       this.onChange(this, 'state');
     } catch (error) {
       const missing = missingParameters(error).filter((name) => !(name in (fields.parameters ?? {})));
-      if (fields.expression !== undefined && missing.length > 0) {
+      if (this.session !== session) {
+        // The session was replaced meanwhile; the new one was made with everything.
+      } else if (error.code === 'unknown_session') {
+        this.#gone(session);
+      } else if (RETRIED.has(error.code)) {
+        this.pending = mergeFields(fields, this.pending ?? {});
+        this.#retryLater(error);
+      } else if (fields.expression !== undefined && missing.length > 0) {
         const parameters = { ...fields.parameters, ...valuesFor(missing, this.shared().parameters) };
         this.pending = mergeFields({ ...fields, parameters }, this.pending ?? {});
       } else {
@@ -334,6 +420,18 @@ export class Surface {
     };
     this.onChange(this, 'error');
   }
+}
+
+/** What a row shows of a `converged` message: null while the mesh is not final. */
+function outcomeOf(converged) {
+  if (!converged) return null;
+  return {
+    outcome: converged.outcome ?? 'surface',
+    certified: converged.certified ?? null,
+    unresolvedCells: converged.unresolved_cells ?? null,
+    budgetUnreachable: Boolean(converged.budget_unreachable),
+    triangles: converged.triangles,
+  };
 }
 
 /** Later fields win; parameters and constraints merge name by name. */

@@ -25,6 +25,8 @@ import { COLOR_MODE_INDEX, sharedSurfaceUniforms, surfaceMaterial } from './surf
 
 export const LIGHT_THEME = { background: '#ffffff', axis: '#4b5563', grid: '#c9ced6', label: '#374151', box: '#9aa0a6', wire: '#202830' };
 export const DARK_THEME = { background: '#15181d', axis: '#aeb6c2', grid: '#3a414b', label: '#d5dae1', box: '#5f6670', wire: '#e6edf3' };
+/** The field of view (degrees) of the view's narrower side. */
+const FIELD_OF_VIEW = 40;
 
 /** One surface in the scene: its geometry (over a slot table), shaded mesh and wireframe. */
 class SurfaceView {
@@ -84,7 +86,7 @@ export class Viewer {
     container.appendChild(this.renderer.domElement);
 
     this.scene = new Scene();
-    this.camera = new PerspectiveCamera(40, 1, 0.01, 1000);
+    this.camera = new PerspectiveCamera(FIELD_OF_VIEW, 1, 0.01, 1000);
     this.camera.up.set(0, 0, 1);
     this.camera.add(new DirectionalLight(0xffffff, 2.4)); // a headlight: every view is lit
     this.camera.children[0].position.set(-0.4, 0.7, 1); // from above left of the eye
@@ -153,24 +155,32 @@ export class Viewer {
     this.requestRender();
   }
 
-  /** The view box [x0, x1, y0, y1, z0, z1]: outline, axes, grid, height colours; `frame` aims the camera. */
+  /**
+   * The view box [x0, x1, y0, y1, z0, z1]: outline, axes, grid, height colours. `frame`: aim the
+   * camera at it, from the front-right (true) or from where the camera looks now ('keep').
+   */
   setBox(box, { frame = false } = {}) {
     const min = new Vector3(box[0], box[2], box[4]);
     const max = new Vector3(box[1], box[3], box[5]);
     this.boxHelper.box.set(min, max);
     this.axes.setBox(box);
     this.uniforms.zRange.value = [box[4], box[5]];
-    if (frame) this.frameBox();
+    if (frame) this.frameBox({ keepDirection: frame === 'keep' });
     this.requestRender();
   }
 
-  /** Looks at the box from the front-right, above, at a distance that shows all of it. */
-  frameBox() {
+  /**
+   * Looks at the box from the front-right, above (or, with `keepDirection`, from the side the
+   * camera is on now), at a distance that shows all of it: the box's bounding sphere fits the
+   * field of view of the view's narrower side (FIELD_OF_VIEW, see #resize).
+   */
+  frameBox({ keepDirection = false } = {}) {
     const box = this.boxHelper.box;
     const center = box.getCenter(new Vector3());
     const radius = box.getSize(new Vector3()).length() / 2;
-    const distance = radius / Math.sin((this.camera.fov * Math.PI) / 360);
-    const direction = new Vector3(1.2, 0.9, 0.75).normalize();
+    const distance = radius / Math.sin((FIELD_OF_VIEW * Math.PI) / 360);
+    const current = this.camera.position.clone().sub(this.controls.target);
+    const direction = keepDirection && current.lengthSq() > 0 ? current.normalize() : new Vector3(1.2, 0.9, 0.75).normalize();
     this.setCamera({ position: center.clone().addScaledVector(direction, distance).toArray(), target: center.toArray() });
   }
 
@@ -236,7 +246,12 @@ export class Viewer {
     const { clientWidth: width, clientHeight: height } = this.container;
     if (width === 0 || height === 0) return;
     this.renderer.setSize(width, height, false);
-    this.camera.aspect = width / height;
+    // The narrower side sees FIELD_OF_VIEW: a portrait view (a phone with the panel hidden)
+    // widens its vertical angle rather than cropping the sides of what a landscape one shows.
+    const aspect = width / height;
+    const halfTangent = Math.tan((FIELD_OF_VIEW * Math.PI) / 360) / Math.min(1, aspect);
+    this.camera.aspect = aspect;
+    this.camera.fov = (360 / Math.PI) * Math.atan(halfTangent);
     this.camera.updateProjectionMatrix();
     this.axes.setScreen(height, this.camera.fov);
     this.requestRender();

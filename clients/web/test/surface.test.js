@@ -2,7 +2,7 @@ import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
 import { Emitter } from '../../js/src/events.js';
-import { NEXT_UPDATE_WAIT_MS, Surface, mergeFields } from '../src/surface.js';
+import { NEXT_UPDATE_WAIT_MS, RETRY_MS, Surface, mergeFields } from '../src/surface.js';
 
 /** A session whose replies the test gives by hand. */
 class FakeSession extends Emitter {
@@ -13,8 +13,11 @@ class FakeSession extends Emitter {
     this.mesh = { functionVersion: 0, triangleCount: 0, synchronized: true, sequence: 0, slots: { count: 0 } };
     this.stats = { firstMeshMs: null };
     this.converged = false;
+    this.lastProgress = null;
+    this.lastConverged = null;
     this.closed = false;
     this.requests = []; // {fields, resolve, reject}
+    this.pauses = 0;
   }
 
   update(fields) {
@@ -35,17 +38,31 @@ class FakeSession extends Emitter {
     this.emit('delta', { header: { kind: 'delta', sequence: 1, functionVersion: this.state.version, converged: false }, removed: [], triangleIds: [] });
   }
 
+  /** The server's `converged` for the current version; the mesh on hand is final. */
+  converge(fields = {}) {
+    this.frame();
+    this.lastConverged = { version: this.state.version, triangles: this.mesh.triangleCount, outcome: 'surface', certified: true, unresolved_cells: 0, budget_unreachable: false, ...fields };
+    this.converged = true;
+    this.emit('converged', this.lastConverged);
+  }
+
+  pause() {
+    ++this.pauses;
+    return Promise.resolve();
+  }
+
   close() {
     this.closed = true;
     return Promise.resolve();
   }
 }
 
-function fakeClient({ failFirst = null } = {}) {
-  const client = { closed: false, sessions: [], creates: [] };
+/** A connected client: its `create` makes FakeSessions; `failures` reject the first creates in turn. */
+function fakeClient({ failures = [] } = {}) {
+  const client = Object.assign(new Emitter(), { closed: false, connected: true, sessions: [], creates: [] });
   client.create = async (fields) => {
     client.creates.push(fields);
-    if (failFirst && client.creates.length === 1) throw failFirst;
+    if (client.creates.length <= failures.length) throw failures[client.creates.length - 1];
     const session = new FakeSession(fields);
     client.sessions.push(session);
     return session;
@@ -53,15 +70,22 @@ function fakeClient({ failFirst = null } = {}) {
   return client;
 }
 
-const tick = () => new Promise((resolve) => setTimeout(resolve, 0));
+const coded = (code, message = code) => Object.assign(new Error(message), { code });
+
+const tick = () => new Promise((resolve) => setImmediate(resolve));
 const shared = (parameters = { a: 1 }) => () => ({ parameters, box: [-1, 1, -1, 1, -1, 1], constraints: {} });
 
-test('Surface: edits made while an update is in flight are merged into one, the latest value winning', async () => {
+/** A surface of `expression` attached to a fake client, once its session is made. */
+async function attached(expression, options = {}) {
   const client = fakeClient();
-  const surface = new Surface({ expression: 'x^2+y^2+z^2=a', shared: shared() });
+  const surface = new Surface({ expression, shared: shared(), ...options });
   surface.attach(client);
   await tick();
-  const session = client.sessions[0];
+  return { client, surface, session: client.sessions[0] };
+}
+
+test('Surface: edits made while an update is in flight are merged into one, the latest value winning', async () => {
+  const { client, surface, session } = await attached('x^2+y^2+z^2=a');
   assert.deepEqual(client.creates[0].parameters, { a: 1 });
   surface.setParameters({ a: 1.1 });
   for (const a of [1.2, 1.3, 1.4]) surface.setParameters({ a });
@@ -82,11 +106,7 @@ test('Surface: edits made while an update is in flight are merged into one, the 
 });
 
 test('Surface: the next update goes after a short wait when the mesh is slow to come', async () => {
-  const client = fakeClient();
-  const surface = new Surface({ expression: 'x=a', shared: shared() });
-  surface.attach(client);
-  await tick();
-  const session = client.sessions[0];
+  const { surface, session } = await attached('x=a');
   surface.setParameters({ a: 2 });
   surface.setParameters({ a: 3 });
   session.answer();
@@ -123,7 +143,7 @@ test('Surface: a rejected equation keeps the session and reports the error with 
 
 test('Surface: create retries once with the parameters the server says are missing', async () => {
   const missing = Object.assign(new Error("parameters: no value for parameter 'β'"), { code: 'bad_field' });
-  const client = fakeClient({ failFirst: missing });
+  const client = fakeClient({ failures: [missing] });
   const surface = new Surface({ expression: 'x=a', shared: shared({ a: 2 }) });
   surface.attach(client);
   await tick();
@@ -150,7 +170,7 @@ test('Surface: a slider moved while the session is being created is sent once it
   );
 });
 
-test('Surface: status follows the session, and a converged empty version is reported empty', async () => {
+test("Surface: status follows the session: the shape being found, refined, then the server's outcome", async () => {
   const client = fakeClient();
   const surface = new Surface({ shared: shared() });
   assert.equal(surface.status, 'empty');
@@ -160,9 +180,98 @@ test('Surface: status follows the session, and a converged empty version is repo
   const session = client.sessions[0];
   assert.equal(surface.status, 'meshing');
   session.frame();
-  session.converged = true;
+  session.lastProgress = { version: 1, resolving: true };
+  assert.equal(surface.status, 'resolving');
+  assert.equal(surface.snapshot().resolving, true);
+  session.lastProgress = { version: 1, resolving: false };
+  assert.equal(surface.status, 'refining');
+  assert.equal(surface.finished, null, 'no outcome before convergence');
+  session.converge({ outcome: 'no_surface' });
   assert.equal(surface.status, 'converged');
-  assert.equal(surface.empty, true);
+  assert.deepEqual(surface.snapshot().outcome, { outcome: 'no_surface', certified: true, unresolvedCells: 0, budgetUnreachable: false, triangles: 0 });
+  surface.setExpression('1/x=a');
+  assert.equal(surface.finished, null, 'an edit on its way: the outcome of the previous version is not shown');
+});
+
+test('Surface: a dropped connection keeps the session; edits wait and go after the reconnection', async () => {
+  const { client, surface, session } = await attached('x=a');
+  session.converge();
+  client.connected = false;
+  session.emit('disconnected');
+  assert.equal(surface.status, 'disconnected');
+  assert.equal(surface.session, session, 'the same session, its mesh still shown');
+  surface.setParameters({ a: 3 }); // the library holds it until the new connection
+  assert.deepEqual(session.requests.map((r) => r.fields), [{ parameters: { a: 3 } }]);
+  client.connected = true;
+  client.emit('reconnected', { attempts: 1, sessions: 1 });
+  session.emit('resubscribed', session.state);
+  await tick();
+  assert.equal(client.creates.length, 1, 'no new session');
+  assert.equal(surface.session, session);
+});
+
+test('Surface: a paused surface pauses its session again after resubscribing (the server does not keep it)', async () => {
+  const { surface, session } = await attached('x=1');
+  await surface.setPaused(true);
+  assert.equal(session.pauses, 1);
+  session.emit('resubscribed', session.state);
+  assert.equal(session.pauses, 2);
+});
+
+test('Surface: a session the server lost is made again with the current values; other endings are not', async () => {
+  const values = { a: 1 };
+  const client = fakeClient();
+  const surface = new Surface({ expression: 'x=a', shared: () => ({ parameters: values, box: [-1, 1, -1, 1, -1, 1], constraints: {} }) });
+  surface.attach(client);
+  await tick();
+  values.a = 5;
+  client.sessions[0].emit('closed', { type: 'closed', reason: 'lost' });
+  await tick();
+  assert.equal(client.creates.length, 2, 'closed (lost): a new session');
+  assert.deepEqual(client.creates[1].parameters, { a: 5 });
+  assert.equal(surface.session, client.sessions[1]);
+
+  values.a = 6;
+  surface.setParameters({ a: 6 });
+  client.sessions[1].requests.shift().reject(coded('unknown_session'));
+  await tick();
+  assert.equal(client.creates.length, 3, 'unknown_session: a new session');
+  assert.deepEqual(client.creates[2].parameters, { a: 6 }, 'with the value the failed update carried');
+  assert.equal(surface.error, null, 'no error shown');
+
+  client.sessions[2].emit('closed', { type: 'closed', reason: 'expired' });
+  await tick();
+  assert.equal(client.creates.length, 3, 'expired: no new session until the next edit');
+  assert.equal(surface.session, null);
+  assert.equal(surface.status, 'ended', 'and the surface says so');
+  assert.equal(surface.snapshot().ended, 'expired');
+  surface.setExpression('x=a+1');
+  assert.equal(surface.status, 'meshing');
+  await tick();
+  assert.equal(client.creates.length, 4);
+  assert.equal(surface.ended, null);
+
+  client.sessions[3].emit('error', coded('eval_timeout', 'too slow'));
+  client.sessions[3].emit('closed', { type: 'closed', reason: 'error' });
+  assert.equal(surface.status, 'error', 'closed after an error: the error says why');
+});
+
+test('Surface: a create the server cannot take now is made again later, and the server says why meanwhile', async (t) => {
+  t.mock.timers.enable({ apis: ['setTimeout'] });
+  const client = fakeClient({ failures: [coded('store_unavailable', 'the session store is down'), coded('closed')] });
+  const surface = new Surface({ expression: 'x=1', shared: shared() });
+  surface.attach(client);
+  await tick();
+  assert.equal(surface.error?.message, 'the session store is down');
+  assert.equal(surface.status, 'meshing', 'not an error of the equation: it will be drawn');
+  t.mock.timers.tick(RETRY_MS);
+  await tick();
+  assert.equal(client.creates.length, 2, 'tried again after RETRY_MS');
+  client.emit('reconnected', { attempts: 1, sessions: 0 }); // the second failed on a lost connection
+  await tick();
+  assert.equal(client.creates.length, 3, 'tried again after the reconnection');
+  assert.ok(surface.session);
+  assert.equal(surface.error, null);
 });
 
 test('mergeFields: later fields win, parameters and constraints merge by name', () => {

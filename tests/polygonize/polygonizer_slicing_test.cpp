@@ -1,0 +1,44 @@
+// Polygonizer::mesh_slice: the final mesh made over many short budgets is the mesh made at once.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+
+#include "polygonize/polygonizer.h"
+#include "support/mesh_checks.h"
+
+namespace isomesh {
+namespace {
+
+TEST(Polygonizer, mesh_slice_over_many_budgets_gives_the_mesh_of_one_call) {
+    for (const char* expression :
+         {"x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8=0", "sin(x)cos(y)+sin(y)cos(z)+sin(z)cos(x)=0"}) {
+        SCOPED_TRACE(expression);
+        const auto field = test::field_of(expression);
+        PolygonizeSettings settings;
+        settings.box = {{-3.3, -3.3, -3.3}, {3.3, 3.3, 3.3}};
+        settings.min_depth = 3;
+        settings.max_depth = 7;
+        const PolygonizeResult whole = polygonize(*field, settings);
+
+        Polygonizer polygonizer(field, settings);
+        polygonizer.advance(WorkBudget{});
+        ASSERT_TRUE(polygonizer.complete());
+        // A clock that ticks at each look: every budget runs out after one chunk of work.
+        auto ticks = std::make_shared<std::int64_t>(0);
+        std::optional<PolygonizeResult> sliced;
+        int calls = 0;
+        for (; !sliced; ++calls) {
+            sliced = polygonizer.mesh_slice(WorkBudget(*ticks + 1, [ticks] { return (*ticks)++; }));
+            ASSERT_LT(calls, 100000);
+        }
+        EXPECT_GT(calls, 3);  // one per chunk of work: it was sliced
+        test::expect_identical(sliced->mesh, whole.mesh);
+        EXPECT_EQ(sliced->stats.cells, whole.stats.cells);
+        EXPECT_EQ(sliced->stats.unresolved_cells, whole.stats.unresolved_cells);
+    }
+}
+
+}  // namespace
+}  // namespace isomesh
