@@ -21,15 +21,15 @@
 //   ambiguous ones run the face and interior tests.
 // - One thread (the pipeline is measured on one thread too).
 //
-// Throughput on this machine (bench_pipeline prints it on every run; figures from one run with a
-// load average of about 4 on 2 cores, thread CPU time): see bench_pipeline's "grid baseline
-// throughput" line; the meshing pass alone runs at about 100-200 million cells per second on
-// smooth surfaces (trimming skips most cells), so the baseline's time is its sampling time, as
-// for flying edges: its paper reports the serial algorithm several times faster than VTK's
-// Marching Cubes and Synchronized Templates on volumes already in memory, and it is bound by
-// memory bandwidth there. For the issue's comparison (numpy sampling plus vtkFlyingEdges3D on a
-// 129^3 grid: 0.34 s for bear.vm, 0.24 s for colonnade.vm on this machine), this baseline is
-// faster: bench_pipeline prints its time for both at 129^3.
+// Throughput (bench_pipeline prints it on every run, "Peers' throughput", beside VTK's
+// vtkFlyingEdges3D on the same samples: vtk_baseline.h): in one run with a load average of about
+// 5 on 2 cores, thread CPU time, the meshing pass ran at 200-780 million cells per second on the
+// smooth surfaces (trimming skips most cells), 1.2-3 times VTK's; for functions with sines or
+// exponentials (the gyroid, the models) the time is mostly sampling. (Flying edges' paper finds
+// the serial algorithm several times faster than VTK's Marching Cubes and Synchronized Templates
+// on volumes already in memory.) For the issue's comparison (numpy sampling plus vtkFlyingEdges3D
+// on a 129^3 grid: 0.34 s for bear.vm, 0.24 s for colonnade.vm), bench_pipeline prints both peers'
+// times at 129^3.
 #pragma once
 
 #include "eval/evaluator.h"
