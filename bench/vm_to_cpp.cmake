@@ -1,5 +1,6 @@
 # Translates a Fidget .vm model into straight-line C++: the native baseline bench_eval compares the
-# tape evaluators with. Run at build time into the build tree (the output for prospero is ~8,000
+# tape evaluators with, and the function bench_pipeline's grid baseline samples (grid_baseline.h).
+# Run at build time into the build tree (the output for prospero is ~8,000
 # lines: generated, never committed).
 #   cmake -DVM=model.vm -DNAME=model -DOUT=native_model.cpp -P vm_to_cpp.cmake
 # Defines: void native_<NAME>(const double* x, const double* y, const double* z, double* out,

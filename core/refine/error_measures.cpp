@@ -129,6 +129,8 @@ MeshErrorReport measure_mesh_error(const Mesh& mesh, Evaluator& evaluator, int s
     const int n = std::max(samples_per_edge, 1);
     double distance_sum = 0.0;
     std::size_t distance_count = 0;
+    double weighted_square_sum = 0.0;  // sum over triangles of area * mean squared distance
+    double weighted_area = 0.0;
     for (const auto& tri : mesh.triangles) {
         const glm::dvec3 p[3] = {mesh.positions[tri[0]], mesh.positions[tri[1]],
                                  mesh.positions[tri[2]]};
@@ -149,6 +151,8 @@ MeshErrorReport measure_mesh_error(const Mesh& mesh, Evaluator& evaluator, int s
         const Projection mid =
             nearest_surface_point(evaluator, 0.5 * (a + b), hint, scale, projection);
         report.epsilon4_total += epsilon4_error({a, b, c, mid.position});
+        double square_sum = 0.0;
+        std::size_t samples = 0;
         for (int i = 0; i <= n; ++i) {
             for (int j = 0; i + j <= n; ++j) {
                 const double u = double(i) / n, v = double(j) / n;
@@ -163,10 +167,19 @@ MeshErrorReport measure_mesh_error(const Mesh& mesh, Evaluator& evaluator, int s
                 report.max_distance = std::max(report.max_distance, d);
                 distance_sum += d;
                 ++distance_count;
+                square_sum += d * d;
+                ++samples;
             }
+        }
+        if (samples > 0) {
+            const double area = 0.5 * glm::length(normal);
+            weighted_square_sum += area * square_sum / double(samples);
+            weighted_area += area;
         }
     }
     report.mean_distance = distance_count > 0 ? distance_sum / double(distance_count) : 0.0;
+    report.rms_distance =
+        weighted_area > 0.0 ? std::sqrt(weighted_square_sum / weighted_area) : 0.0;
     return report;
 }
 

@@ -111,6 +111,11 @@ struct MeshErrorReport {
     double max_distance = 0.0;
     /// Mean of those distances over all samples.
     double mean_distance = 0.0;
+    /// Root mean square of those distances, area-weighted: each triangle's mean squared sample
+    /// distance weighted by its area, so that it estimates the rms distance over the surface of
+    /// the mesh whatever the triangles' sizes (the measure that compares meshers at equal
+    /// accuracy: bench/bench_pipeline.cpp).
+    double rms_distance = 0.0;
     /// Samples whose projection failed (they are left out of the distances).
     std::size_t failed_projections = 0;
 };

@@ -142,5 +142,22 @@ TEST(Accuracy, thesis_table_refiner_against_marching_cubes) {
     EXPECT_LT(sphere.coarse_start.error.max_distance, 0.75 * sphere.mc.error.max_distance);
 }
 
+// Two triangles parallel to the plane z = 0 at heights 0.1 and 0.4, the second of a quarter of
+// the first's area: the rms distance weighs each by its area, sqrt((4 * 0.1^2 + 0.4^2) / 5), where
+// the mean over samples weighs them equally (0.25).
+TEST(MeasureMeshError, rms_distance_weighs_triangles_by_area) {
+    const auto plane =
+        test::make_analytic_field({[](const glm::dvec3& p) { return p.z; },
+                                   [](const glm::dvec3&) { return glm::dvec3(0, 0, 1); }});
+    Mesh mesh;
+    mesh.positions = {{0, 0, 0.1}, {2, 0, 0.1}, {0, 2, 0.1}, {0, 0, 0.4}, {1, 0, 0.4}, {0, 1, 0.4}};
+    mesh.triangles = {{0, 1, 2}, {3, 4, 5}};
+    auto evaluator = plane->make_evaluator();
+    const MeshErrorReport report = measure_mesh_error(mesh, *evaluator, 3);
+    EXPECT_EQ(report.failed_projections, 0u);
+    EXPECT_NEAR(report.mean_distance, 0.25, 1e-9);
+    EXPECT_NEAR(report.rms_distance, std::sqrt((4 * 0.01 + 0.16) / 5), 1e-9);
+}
+
 }  // namespace
 }  // namespace isomesh
