@@ -303,6 +303,7 @@ MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& in
     converged_message_.reset();
     counters_at_version_ = pipeline_->counters();
     phase1_time_ = {};
+    phase1_settled_ = false;
     last_progress_ = Clock::now();
     splits_since_progress_ = 0;
     return Start::started;
@@ -364,9 +365,11 @@ void MeshSession::replace_mesh(Inbox& inbox, std::uint32_t version, bool converg
 }
 
 void MeshSession::limit_phase1(Clock::duration spent) {
-    if (!pipeline_->status().resolving) return;
+    if (!pipeline_->status().resolving || phase1_settled_) return;
     phase1_time_ += spent;
     if (phase1_time_ < services_.settings.eval_timeout) return;
+    // Once: what is left (the final mesh, its simplification) is made over the next turns.
+    phase1_settled_ = true;
     // Slow to resolve, not broken: the mesh shown so far stays, its unresolved cells reported.
     pipeline_->settle();
     services_.logger.info("phase1_limited",

@@ -247,6 +247,7 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     FunctionVersion current_;
     std::unique_ptr<Pipeline> pipeline_;
     Clock::duration phase1_time_{};  // CPU time of the current version's phase 1 so far
+    bool phase1_settled_ = false;    // its classification stopped at the limit
     protocol::MeshEncoding encoding_;
     WireMesh wire_;
     DeltaBuilder pending_;
