@@ -179,6 +179,10 @@ void Pipeline::advance_phase1(const WorkBudget& budget) {
         field_changing_ = false;
         install(phase1_mesh(budget).mesh, budget);
     }
+    if (intermediate_) {
+        continue_intermediate(budget);
+        return;
+    }
     phase1_->advance(budget);
     if (phase1_->complete()) {
         finish_phase1(budget);
@@ -188,8 +192,22 @@ void Pipeline::advance_phase1(const WorkBudget& budget) {
     const bool grown = static_cast<double>(counts.classified) >=
                        kRemeshGrowth * static_cast<double>(classified_at_last_mesh_);
     if (!field_changing_ && grown &&
-        counts.pending + counts.leaves + counts.unresolved <= settings_.max_intermediate_cells)
-        install(phase1_mesh(budget).mesh, budget, true);
+        counts.pending + counts.leaves + counts.unresolved <= settings_.max_intermediate_cells) {
+        intermediate_ = true;
+        continue_intermediate(budget);
+    }
+}
+
+void Pipeline::continue_intermediate(const WorkBudget& budget) {
+    // Classification waits meanwhile: the mesh is of the octree as it stood.
+    std::optional<PolygonizeResult> made = phase1_->mesh_slice(budget);
+    if (!made) {
+        if (budget.cancelled()) intermediate_ = false;
+        return;
+    }
+    intermediate_ = false;
+    record_phase1_mesh(*made);
+    install(std::move(made->mesh), budget, true);
 }
 
 void Pipeline::finish_phase1(const WorkBudget& budget) {
@@ -294,6 +312,7 @@ void Pipeline::set_field(std::shared_ptr<const Field> field) {
     field_ = std::move(field);
     phase1_ = std::make_unique<Polygonizer>(field_, settings_.phase1);
     final_mesh_.reset();
+    intermediate_ = false;
     shadow_.reset();
     simplifying_.reset();
     canonical_pending_ = false;

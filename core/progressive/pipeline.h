@@ -144,6 +144,7 @@ class Pipeline {
     void first_mesh(const WorkBudget& budget);
     void advance_phase1(const WorkBudget& budget);
     void finish_phase1(const WorkBudget& budget);
+    void continue_intermediate(const WorkBudget& budget);
     PolygonizeResult phase1_mesh(const WorkBudget& budget);
     void record_phase1_mesh(const PolygonizeResult& result);
     /// Makes `mesh` (a phase-1 mesh) the refiner's roots, simplified to the budget first where
@@ -170,6 +171,7 @@ class Pipeline {
     std::optional<Mesh> installed_;  // the last phase-1 mesh installed, before simplification
     std::unique_ptr<Simplification> simplifying_;  // installed_ on its way to the refiner
     std::optional<PolygonizeResult> final_mesh_;   // phase 1's, made, to install next step
+    bool intermediate_ = false;  // an intermediate phase-1 mesh is being made (mesh_slice)
     std::size_t classified_at_last_mesh_ = 0;
     bool field_changing_ = false;  // set_field: phase 1 of the new function decides the topology
     PipelineStatus status_;
