@@ -351,8 +351,8 @@ class FrontierMesher {
     /// this ends). Incremental: after a split, only the new leaves and the leaves across the
     /// split cells' faces are graded and meshed again (a leaf's grading and mesh depend only on
     /// itself and its face neighbours), so the result is that of meshing everything each time.
-    /// Then the roots of the crossings used, the mesh, its cleanup.
-    enum class Stage { corners, grade, split, locate, mesh, roots, assemble, finish, done };
+    /// Then the roots of the crossings used, the mesh, its cleanup, its adjacency.
+    enum class Stage { corners, grade, split, locate, mesh, roots, assemble, clean, finish, done };
 
     /// A leaf's meshing state, kept beside leaves_.
     struct LeafState {
@@ -387,7 +387,10 @@ class FrontierMesher {
                 return roots_chunk();
             case Stage::assemble:
                 result_.mesh = assemble(roots_, parts_);
-                stage_ = Stage::finish;
+                stage_ = Stage::clean;
+                return true;
+            case Stage::clean:
+                clean();
                 return true;
             case Stage::finish:
                 finish();
@@ -486,7 +489,7 @@ class FrontierMesher {
         return true;
     }
 
-    void finish() {
+    void clean() {
         PolygonizeStats& stats = result_.stats;
         stats.cells = leaves_.size();
         stats.depth = finest_;
@@ -501,6 +504,10 @@ class FrontierMesher {
             remove_thin_triangles(result_.mesh, box_faces(result_.mesh, lattice_.box()), cleanup);
         stats.collapses = report.collapses;
         stats.flips = report.flips;
+        stage_ = Stage::finish;
+    }
+
+    void finish() {
         build_adjacency(result_.mesh);
         stage_ = Stage::done;
     }
