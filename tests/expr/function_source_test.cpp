@@ -1,11 +1,13 @@
 #include <gtest/gtest.h>
 
 #include "expr/function_source.h"
+#include "support/shared_data.h"
 
 namespace isomesh {
 namespace {
 
 TEST(CompileSource, at_vm_path_reads_the_model) {
+    ISOMESH_SKIP_WITHOUT_SHARED_DATA();
     CompileResult result =
         compile_source("@" + std::string(ISOMESH_SHARED_DIR) + "/testdata/vm/tanglecube.vm");
     ASSERT_TRUE(result.ok()) << result.error->to_string();

@@ -14,6 +14,7 @@
 #include "mesh/topology.h"
 #include "polygonize/polygonizer.h"
 #include "support/mesh_checks.h"
+#include "support/shared_data.h"
 
 namespace isomesh {
 namespace {
@@ -188,6 +189,7 @@ TEST(Polygonizer, cancellation_returns_an_empty_mesh) {
 }
 
 TEST(Polygonizer, meshes_a_fidget_model) {
+    ISOMESH_SKIP_WITHOUT_SHARED_DATA();
     CompileResult compiled =
         compile_source("@" + std::string(ISOMESH_SHARED_DIR) + "/testdata/vm/tanglecube.vm");
     ASSERT_TRUE(compiled.ok());
