@@ -8,8 +8,7 @@ namespace {
 
 TEST(CompileSource, at_vm_path_reads_the_model) {
     ISOMESH_SKIP_WITHOUT_SHARED_DATA();
-    CompileResult result =
-        compile_source("@" + std::string(ISOMESH_SHARED_DIR) + "/testdata/vm/tanglecube.vm");
+    CompileResult result = compile_source("@" ISOMESH_SHARED_DIR "/testdata/vm/tanglecube.vm");
     ASSERT_TRUE(result.ok()) << result.error->to_string();
     EXPECT_EQ(result.tape.size(), 20u);
 }
@@ -28,7 +27,7 @@ TEST(CompileSource, bad_files_are_errors) {
     CompileResult other = compile_source("@model.obj");
     ASSERT_FALSE(other.ok());
     EXPECT_EQ(other.error->message, "unsupported file 'model.obj': expected a .vm model");
-    EXPECT_FALSE(compile_source("@" + std::string(ISOMESH_SHARED_DIR) + "/testdata/vm/").ok());
+    EXPECT_FALSE(compile_source("@" ISOMESH_SHARED_DIR "/testdata/vm/").ok());
 }
 
 }  // namespace

@@ -15,7 +15,7 @@ namespace {
 using testing::interpret;
 
 std::string read_model(const std::string& name) {
-    std::ifstream file(std::string(ISOMESH_SHARED_DIR) + "/testdata/vm/" + name);
+    std::ifstream file(std::string(ISOMESH_SHARED_DIR "/testdata/vm/") + name);
     EXPECT_TRUE(file) << name;
     std::ostringstream text;
     text << file.rdbuf();

@@ -34,7 +34,7 @@ void unpack(const std::string& archive) {
     const fs::path marker = testdata_dir() / (archive + ".unpacked");
     if (fs::exists(marker)) return;
     fs::create_directories(testdata_dir());
-    const std::string command = "tar -xJf '" + std::string(ISOMESH_SHARED_DIR) + "/testdata/mc33/" +
+    const std::string command = std::string("tar -xJf '" ISOMESH_SHARED_DIR "/testdata/mc33/") +
                                 archive + "' -C '" + testdata_dir().string() +
                                 "' --wildcards '*.iso' '*.txt'";  // not the .nhdr/.raw copies
     ASSERT_EQ(std::system(command.c_str()), 0) << command;

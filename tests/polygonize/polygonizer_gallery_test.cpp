@@ -190,8 +190,7 @@ TEST(Polygonizer, cancellation_returns_an_empty_mesh) {
 
 TEST(Polygonizer, meshes_a_fidget_model) {
     ISOMESH_SKIP_WITHOUT_SHARED_DATA();
-    CompileResult compiled =
-        compile_source("@" + std::string(ISOMESH_SHARED_DIR) + "/testdata/vm/tanglecube.vm");
+    CompileResult compiled = compile_source("@" ISOMESH_SHARED_DIR "/testdata/vm/tanglecube.vm");
     ASSERT_TRUE(compiled.ok());
     const auto field = make_tape_field(std::make_shared<const Tape>(std::move(compiled.tape)), {});
     const PolygonizeResult result = polygonize(*field, {});

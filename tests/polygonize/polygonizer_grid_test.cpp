@@ -27,9 +27,9 @@ fs::path closed_surfaces() {
     const fs::path marker = dir / "Closed_Surfaces.unpacked";
     if (!fs::exists(marker)) {
         fs::create_directories(dir);
-        const std::string command = "tar -xJf '" + std::string(ISOMESH_SHARED_DIR) +
-                                    "/testdata/mc33/Closed_Surfaces.tar.xz' -C '" + dir.string() +
-                                    "' --wildcards '*.iso' '*.txt'";
+        const std::string command = "tar -xJf '" ISOMESH_SHARED_DIR
+                                    "/testdata/mc33/Closed_Surfaces.tar.xz' -C '" +
+                                    dir.string() + "' --wildcards '*.iso' '*.txt'";
         EXPECT_EQ(std::system(command.c_str()), 0) << command;
         std::ofstream(marker) << "ok\n";
     }
