@@ -8,6 +8,8 @@
 #include <sstream>
 #include <string>
 
+#include "support/shared_data.h"
+
 namespace {
 
 struct CliRun {
@@ -102,6 +104,7 @@ TEST(EvalCommand, box_prints_interval_and_flags) {
 }
 
 TEST(EvalCommand, reads_vm_files) {
+    ISOMESH_SKIP_WITHOUT_SHARED_DATA();
     std::string model = joined({"@", ISOMESH_SHARED_DIR, "/testdata/vm/tanglecube.vm"});
     nlohmann::json out = single_json_line(isomesh({"eval", model, "--at", "0,0,0"}));
     EXPECT_DOUBLE_EQ(out["value"].get<double>(), 10.0);

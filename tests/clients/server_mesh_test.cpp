@@ -15,6 +15,7 @@
 #include "client_processes.h"
 #include "protocol/mesh_codec.h"
 #include "protocol/messages.h"
+#include "support/shared_data.h"
 
 namespace isomesh::testing {
 namespace {
@@ -96,6 +97,7 @@ TEST_F(MeshOnServer, phase_one_matches_in_process_at_server_depths) {
 }
 
 TEST_F(MeshOnServer, vm_model_matches_in_process) {
+    ISOMESH_SKIP_WITHOUT_SHARED_DATA();
     const Args args = {"@" ISOMESH_SHARED_DIR "/testdata/vm/tanglecube.vm", "--box",
                        "-3,3,-3,3,-3,3", "--triangles", "3000"};
     expect_same_mesh(mesh(args, false), mesh(args, true), {-3, 3, -3, 3, -3, 3});

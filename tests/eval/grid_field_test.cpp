@@ -1,6 +1,7 @@
 // Sampled grids: the .iso loader (on the Marching Cubes 33 suite's files and on broken files) and
 // the trilinear field.
 #include "eval/grid_field.h"
+#include "support/shared_data.h"
 
 #include <gtest/gtest.h>
 
@@ -67,6 +68,7 @@ IsoGrid unit_grid(int n, const G& g) {
 }
 
 TEST(LoadIso, reads_marching_cubes_case) {
+    ISOMESH_SKIP_WITHOUT_SHARED_DATA();
     std::string error;
     auto grid = load_iso(
         unpacked("MarchingCubes_cases.tar.xz", "MarchingCubes_cases/Grids/7-scalar_field.iso"),
@@ -84,6 +86,7 @@ TEST(LoadIso, reads_marching_cubes_case) {
 }
 
 TEST(LoadIso, reads_closed_surface_grid) {
+    ISOMESH_SKIP_WITHOUT_SHARED_DATA();
     std::string error;
     auto grid = load_iso(
         unpacked("Closed_Surfaces.tar.xz", "Closed_Surfaces/Grids/0-scalar_field.iso"), &error);

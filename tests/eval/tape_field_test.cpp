@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "support/shared_data.h"
 #include "test_support.h"
 
 namespace isomesh {
@@ -121,6 +122,7 @@ TEST(TapeEvaluator, interval_gradient_proves_monotone_edges) {
 }
 
 TEST(TapeEvaluator, evaluators_of_one_field_run_concurrently) {
+    ISOMESH_SKIP_WITHOUT_SHARED_DATA();
     auto field =
         make_tape_field(testing::load_vm_tape(ISOMESH_SHARED_DIR "/testdata/vm/bear.vm"), {});
     std::vector<double> xs(2000), ys(2000), zs(2000, 0.1);

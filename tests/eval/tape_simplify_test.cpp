@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "eval/tape_field.h"
+#include "support/shared_data.h"
 #include "test_support.h"
 
 namespace isomesh {
@@ -96,6 +97,7 @@ TEST(TapeSimplify, proves_choices_from_enclosures) {
 // prospero (7,866 instructions, hundreds of min/max): tiles of a 1024^2-style grid need a small
 // part of the tape each, and evaluate to exactly the same values.
 TEST(TapeSimplify, prospero_tiles_run_much_shorter_tapes) {
+    ISOMESH_SKIP_WITHOUT_SHARED_DATA();
     auto field =
         make_tape_field(testing::load_vm_tape(ISOMESH_SHARED_DIR "/testdata/vm/prospero.vm"), {});
     auto tiled = field->make_evaluator(), plain = field->make_evaluator();

@@ -1,13 +1,14 @@
 #include <gtest/gtest.h>
 
 #include "expr/function_source.h"
+#include "support/shared_data.h"
 
 namespace isomesh {
 namespace {
 
 TEST(CompileSource, at_vm_path_reads_the_model) {
-    CompileResult result =
-        compile_source("@" + std::string(ISOMESH_SHARED_DIR) + "/testdata/vm/tanglecube.vm");
+    ISOMESH_SKIP_WITHOUT_SHARED_DATA();
+    CompileResult result = compile_source("@" ISOMESH_SHARED_DIR "/testdata/vm/tanglecube.vm");
     ASSERT_TRUE(result.ok()) << result.error->to_string();
     EXPECT_EQ(result.tape.size(), 20u);
 }
@@ -26,7 +27,7 @@ TEST(CompileSource, bad_files_are_errors) {
     CompileResult other = compile_source("@model.obj");
     ASSERT_FALSE(other.ok());
     EXPECT_EQ(other.error->message, "unsupported file 'model.obj': expected a .vm model");
-    EXPECT_FALSE(compile_source("@" + std::string(ISOMESH_SHARED_DIR) + "/testdata/vm/").ok());
+    EXPECT_FALSE(compile_source("@" ISOMESH_SHARED_DIR "/testdata/vm/").ok());
 }
 
 }  // namespace

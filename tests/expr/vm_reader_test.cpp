@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "expr/vm_reader.h"
+#include "support/shared_data.h"
 #include "tape_interpreter.h"
 
 namespace isomesh {
@@ -14,7 +15,7 @@ namespace {
 using testing::interpret;
 
 std::string read_model(const std::string& name) {
-    std::ifstream file(std::string(ISOMESH_SHARED_DIR) + "/testdata/vm/" + name);
+    std::ifstream file(std::string(ISOMESH_SHARED_DIR "/testdata/vm/") + name);
     EXPECT_TRUE(file) << name;
     std::ostringstream text;
     text << file.rdbuf();
@@ -29,6 +30,7 @@ Tape read_model_tape(const std::string& name) {
 }
 
 TEST(ReadVm, tanglecube_agrees_with_its_formula) {
+    ISOMESH_SKIP_WITHOUT_SHARED_DATA();
     Tape tape = read_model_tape("tanglecube.vm");
     EXPECT_EQ(tape.size(), 20u);
     std::mt19937 random(7);
@@ -42,6 +44,7 @@ TEST(ReadVm, tanglecube_agrees_with_its_formula) {
 }
 
 TEST(ReadVm, reads_the_large_models) {
+    ISOMESH_SKIP_WITHOUT_SHARED_DATA();
     // Instruction counts from the README; sharing repeated constants may only shorten them.
     const std::tuple<std::string, std::size_t, unsigned> models[] = {
         {"bear.vm", 657, 7u}, {"colonnade.vm", 808, 7u}, {"prospero.vm", 7866, 3u}};

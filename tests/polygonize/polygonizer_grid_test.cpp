@@ -14,6 +14,7 @@
 #include "mesh/topology.h"
 #include "polygonize/polygonizer.h"
 #include "support/mesh_checks.h"
+#include "support/shared_data.h"
 
 namespace isomesh {
 namespace {
@@ -26,9 +27,9 @@ fs::path closed_surfaces() {
     const fs::path marker = dir / "Closed_Surfaces.unpacked";
     if (!fs::exists(marker)) {
         fs::create_directories(dir);
-        const std::string command = "tar -xJf '" + std::string(ISOMESH_SHARED_DIR) +
-                                    "/testdata/mc33/Closed_Surfaces.tar.xz' -C '" + dir.string() +
-                                    "' --wildcards '*.iso' '*.txt'";
+        const std::string command = "tar -xJf '" ISOMESH_SHARED_DIR
+                                    "/testdata/mc33/Closed_Surfaces.tar.xz' -C '" +
+                                    dir.string() + "' --wildcards '*.iso' '*.txt'";
         EXPECT_EQ(std::system(command.c_str()), 0) << command;
         std::ofstream(marker) << "ok\n";
     }
@@ -67,14 +68,17 @@ void expect_suite_topology(int first, int step, int min_depth, int max_depth) {
 }
 
 TEST(PolygonizerGrid, closed_surfaces_at_grid_resolution) {
+    ISOMESH_SKIP_WITHOUT_SHARED_DATA();
     expect_suite_topology(0, 10, 2, 2);
 }
 
 TEST(PolygonizerGrid, closed_surfaces_below_grid_resolution) {
+    ISOMESH_SKIP_WITHOUT_SHARED_DATA();
     expect_suite_topology(3, 10, 2, 3);
 }
 
 TEST(PolygonizerGrid, vertices_lie_on_the_interpolant) {
+    ISOMESH_SKIP_WITHOUT_SHARED_DATA();
     const fs::path root = closed_surfaces();
     std::string error;
     std::optional<IsoGrid> grid =
