@@ -335,6 +335,14 @@ void Pipeline::set_constraint(Constraint constraint) {
     // is reached by refining from the roots as they are.)
     const std::optional<std::size_t> limit = settings_.refine.constraint.triangle_limit();
     if (installed_ && (simplifying_ || (limit && refiner_->root_topology().triangles > *limit))) {
+        if (field_changing_) {
+            // installed_ is the previous version's mesh, off the new surface: show the new
+            // version's phase 1 as it stands instead.
+            field_changing_ = false;
+            intermediate_ = false;
+            install(phase1_mesh(WorkBudget{}).mesh, WorkBudget{});
+            return;
+        }
         install(*installed_, WorkBudget{});
         return;
     }
