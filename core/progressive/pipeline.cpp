@@ -153,7 +153,9 @@ void Pipeline::settle_version(PipelineStep& out, const WorkBudget& budget) {
     retire_refiner();
     refiner_ = std::move(shadow_);
     canonical_pending_ = false;
-    out.delta = std::move(swap);
+    // After what this step already changed (its refinement converged the kept mesh): the swap
+    // removes those changes too.
+    gather(out.delta, std::move(swap));
     out.restarted = true;
     out.converged = true;
 }
