@@ -295,18 +295,6 @@ Mesh assemble(const CrossingRoots& crossings, const std::vector<LeafMeshes>& par
     return mesh;
 }
 
-/// Bit 2 * axis + side for each face of `box` the vertex lies on.
-std::vector<std::uint8_t> box_faces(const Mesh& mesh, const Box& box) {
-    std::vector<std::uint8_t> faces(mesh.positions.size(), 0);
-    for (std::size_t v = 0; v < faces.size(); ++v) {
-        for (int axis = 0; axis < 3; ++axis) {
-            if (mesh.positions[v][axis] == box.lo[axis]) faces[v] |= 1u << (2 * axis);
-            if (mesh.positions[v][axis] == box.hi[axis]) faces[v] |= 1u << (2 * axis + 1);
-        }
-    }
-    return faces;
-}
-
 }  // namespace
 
 /// The mesh of a frontier (steps 2 to 6 of the file comment), made over one or several calls of
@@ -641,6 +629,17 @@ class FrontierMesher {
     CrossingRoots roots_;
     PolygonizeResult result_;
 };
+
+std::vector<std::uint8_t> box_faces(const Mesh& mesh, const Box& box) {
+    std::vector<std::uint8_t> faces(mesh.positions.size(), 0);
+    for (std::size_t v = 0; v < faces.size(); ++v) {
+        for (int axis = 0; axis < 3; ++axis) {
+            if (mesh.positions[v][axis] == box.lo[axis]) faces[v] |= 1u << (2 * axis);
+            if (mesh.positions[v][axis] == box.hi[axis]) faces[v] |= 1u << (2 * axis + 1);
+        }
+    }
+    return faces;
+}
 
 void validate(const PolygonizeSettings& s) {
     for (int axis = 0; axis < 3; ++axis) {

@@ -11,8 +11,10 @@
 #include <atomic>
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "eval/evaluator.h"
 #include "mesh/mesh.h"
@@ -139,5 +141,9 @@ class Polygonizer {
 /// Throws std::invalid_argument for an invalid box or depths; exceptions from the field's
 /// evaluators are passed on.
 PolygonizeResult polygonize(const Field& field, const PolygonizeSettings& settings);
+
+/// For each vertex of `mesh`, bit 2 * axis + side for each face of `box` it lies on: what the
+/// collapses of thin-triangle cleanup and simplification keep on the box (mesh/edge_collapse.h).
+std::vector<std::uint8_t> box_faces(const Mesh& mesh, const Box& box);
 
 }  // namespace isomesh

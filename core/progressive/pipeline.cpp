@@ -22,18 +22,6 @@ bool same_topology(const TopologyReport& a, const TopologyReport& b) {
            (a.boundary_edges == 0) == (b.boundary_edges == 0);
 }
 
-/// Bit 2 * axis + side for each face of `box` the vertex lies on.
-std::vector<std::uint8_t> box_faces(const Mesh& mesh, const Box& box) {
-    std::vector<std::uint8_t> faces(mesh.positions.size(), 0);
-    for (std::size_t v = 0; v < faces.size(); ++v) {
-        for (int axis = 0; axis < 3; ++axis) {
-            if (mesh.positions[v][axis] == box.lo[axis]) faces[v] |= 1u << (2 * axis);
-            if (mesh.positions[v][axis] == box.hi[axis]) faces[v] |= 1u << (2 * axis + 1);
-        }
-    }
-    return faces;
-}
-
 void gather(MeshDelta& into, MeshDelta delta) {
     if (into.empty()) {
         into = std::move(delta);
