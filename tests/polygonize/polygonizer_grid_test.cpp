@@ -9,6 +9,7 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include "eval/grid_field.h"
 #include "mesh/topology.h"
@@ -21,19 +22,25 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// Unpacks the closed surfaces once into this test's own corner of the build tree.
+/// Unpacks the closed surfaces once into this test's own corner of the build tree. The tests of
+/// this file run as concurrent processes: each unpacks into a folder of its own and renames it into
+/// place, which is atomic (a later rename fails on the folder already there), so none reads a file
+/// another is still writing.
 fs::path closed_surfaces() {
     const fs::path dir = fs::path(ISOMESH_BINARY_DIR) / "testdata" / "polygonize";
-    const fs::path marker = dir / "Closed_Surfaces.unpacked";
-    if (!fs::exists(marker)) {
-        fs::create_directories(dir);
+    const fs::path root = dir / "Closed_Surfaces";
+    if (!fs::exists(root)) {
+        const fs::path scratch = dir / ("unpacking-" + std::to_string(::getpid()));
+        fs::create_directories(scratch);
         const std::string command = "tar -xJf '" ISOMESH_SHARED_DIR
                                     "/testdata/mc33/Closed_Surfaces.tar.xz' -C '" +
-                                    dir.string() + "' --wildcards '*.iso' '*.txt'";
+                                    scratch.string() + "' --wildcards '*.iso' '*.txt'";
         EXPECT_EQ(std::system(command.c_str()), 0) << command;
-        std::ofstream(marker) << "ok\n";
+        std::error_code lost;  // another process renamed its copy first
+        fs::rename(scratch / "Closed_Surfaces", root, lost);
+        fs::remove_all(scratch);
     }
-    return dir / "Closed_Surfaces";
+    return root;
 }
 
 void expect_suite_topology(int first, int step, int min_depth, int max_depth) {
