@@ -112,7 +112,7 @@ TEST(FrameHeader, rejects_invalid_headers) {
     b[0] = 'X';
     EXPECT_TRUE(rejected(b));
     b = valid;
-    b[4] = 2;
+    b[4] = 3;
     EXPECT_TRUE(rejected(b, ErrorCode::unsupported_version));
     b = valid;
     b[5] = 3;
