@@ -1,0 +1,91 @@
+// Bytes on the wire (not part of the test command): every WebSocket payload byte a client receives
+// for one session, from sending `create` to the `converged` message, per triangle of the final
+// mesh, in protocol version 1 and version 2 over the same server, side by side. Also the bytes of
+// the deltas after the last keyframe per triangle they added (net: final triangles minus the last
+// keyframe's), and where they went (keyframes, deltas, control messages).
+//
+//   (cd tests/server/node && npm ci) && node bench/wire_bytes.mjs [--runs N] [--threads N]
+//
+// It starts build/bin/isomesh-server (or $ISOMESH_BIN_DIR's) itself. Surfaces: the sphere
+// x^2+y^2+z^2=4 at budget 5,000 and the gallery's gyroid (t = 0, box ±6) at 100,000.
+
+import { startServer, WebSocket } from '../tests/server/node/harness.js';
+
+const arg = (name, fallback) => (process.argv.includes(name) ? process.argv[process.argv.indexOf(name) + 1] : fallback);
+const runs = Number(arg('--runs', '3'));
+const threads = arg('--threads', '2');
+
+const SURFACES = [
+  { name: 'sphere, budget 5,000', expression: 'x^2+y^2+z^2=4', box: [-3, 3, -3, 3, -3, 3], triangles: 5000 },
+  { name: 'gyroid, budget 100,000', expression: 'sin(x)cos(y)+sin(y)cos(z)+sin(z)cos(x)=t', parameters: { t: 0 }, box: [-6, 6, -6, 6, -6, 6], triangles: 100000 },
+];
+
+/** One session on a fresh connection speaking `version`; resolves with its byte counts. */
+function measure(server, surface, version) {
+  return new Promise((resolve, reject) => {
+    const ws = new WebSocket(server.wsUrl);
+    ws.binaryType = 'nodebuffer';
+    const bytes = { keyframes: 0, deltas: 0, text: 0, deltasAfterKeyframe: 0, frames: 0 };
+    let keyframeTriangles = 0;
+    const timer = setTimeout(() => reject(new Error(`${surface.name}: no convergence within 120 s`)), 120000);
+    ws.on('open', () => {
+      const create = { v: version, type: 'create', id: 1, expression: surface.expression, box: surface.box, constraints: { triangles: surface.triangles } };
+      if (surface.parameters) create.parameters = surface.parameters;
+      ws.send(JSON.stringify(create));
+    });
+    ws.on('message', (data, isBinary) => {
+      if (isBinary) {
+        ++bytes.frames;
+        if (data[4] !== version) reject(new Error(`frame of version ${data[4]} on a version-${version} connection`));
+        if (data[5] === 1) {
+          bytes.keyframes += data.length;
+          keyframeTriangles = data.readUInt32LE(56);
+          bytes.deltasAfterKeyframe = 0;
+        } else {
+          bytes.deltas += data.length;
+          bytes.deltasAfterKeyframe += data.length;
+        }
+        return;
+      }
+      bytes.text += data.length;
+      const message = JSON.parse(data.toString());
+      if (message.v !== version) reject(new Error(`message of version ${message.v} on a version-${version} connection`));
+      if (message.type === 'error') reject(new Error(JSON.stringify(message)));
+      if (message.type !== 'converged') return;
+      clearTimeout(timer);
+      ws.close();
+      resolve({ ...bytes, triangles: message.triangles, keyframeTriangles });
+    });
+    ws.on('error', reject);
+  });
+}
+
+const median = (values) => [...values].sort((a, b) => a - b)[Math.floor(values.length / 2)];
+const fmt = (x) => x.toFixed(2);
+
+const server = await startServer(['--threads', threads]);
+try {
+  console.log(`bytes received from create to converged, median of ${runs} runs (each run: v1 then v2, same server)`);
+  for (const surface of SURFACES) {
+    const results = { 1: [], 2: [] };
+    for (let run = 0; run < runs; ++run) {
+      for (const version of [1, 2]) results[version].push(await measure(server, surface, version));
+    }
+    const perFinal = {};
+    for (const version of [1, 2]) {
+      const r = results[version];
+      const total = (x) => x.keyframes + x.deltas + x.text;
+      perFinal[version] = median(r.map((x) => total(x) / x.triangles));
+      const perAdded = median(r.map((x) => x.deltasAfterKeyframe / Math.max(1, x.triangles - x.keyframeTriangles)));
+      const m = r[r.map((x) => total(x) / x.triangles).indexOf(perFinal[version])];
+      console.log(
+        `  ${surface.name.padEnd(24)} v${version}: ${fmt(perFinal[version])} bytes per final triangle ` +
+          `(${m.triangles} triangles, ${total(m)} bytes: keyframes ${m.keyframes}, deltas ${m.deltas} in ${m.frames} frames, control ${m.text}); ` +
+          `deltas after the last keyframe: ${fmt(perAdded)} bytes per added triangle`,
+      );
+    }
+    console.log(`  ${surface.name.padEnd(24)} v2 / v1 = ${fmt(perFinal[2] / perFinal[1])}`);
+  }
+} finally {
+  await server.stop();
+}
