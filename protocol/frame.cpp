@@ -203,10 +203,13 @@ std::uint64_t frame_sequence(std::span<const std::uint8_t> frame) {
 }
 
 Result<FrameHeader> read_frame_header(std::span<const std::uint8_t> in) {
-    if (in.size() < kFrameHeaderBytes) return frame_error("frame shorter than its 76-byte header");
+    if (in.size() < kDeltaV2HeaderBytes) return frame_error("frame shorter than its header");
     if (!std::equal(kFrameMagic.begin(), kFrameMagic.end(), in.begin())) {
         return frame_error("frame does not start with ISOM");
     }
+    const bool short_header = in[4] == 2 && in[5] == static_cast<std::uint8_t>(FrameKind::delta);
+    if (!short_header && in.size() < kFrameHeaderBytes)
+        return frame_error("frame shorter than its 76-byte header");
     if (in[4] < kProtocolVersion || in[4] > kMaxProtocolVersion) {
         return Error{ErrorCode::unsupported_version,
                      "frame of protocol version " + std::to_string(in[4])};
