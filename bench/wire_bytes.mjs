@@ -25,7 +25,7 @@ function measure(server, surface, version) {
   return new Promise((resolve, reject) => {
     const ws = new WebSocket(server.wsUrl);
     ws.binaryType = 'nodebuffer';
-    const bytes = { keyframes: 0, deltas: 0, text: 0, deltasAfterKeyframe: 0, frames: 0 };
+    const bytes = { keyframes: 0, deltas: 0, text: 0, deltasAfterKeyframe: 0, frames: 0, keyframeList: [] };
     let keyframeTriangles = 0;
     const timer = setTimeout(() => reject(new Error(`${surface.name}: no convergence within 120 s`)), 120000);
     ws.on('open', () => {
@@ -40,6 +40,7 @@ function measure(server, surface, version) {
         if (data[5] === 1) {
           bytes.keyframes += data.length;
           keyframeTriangles = data.readUInt32LE(56);
+          bytes.keyframeList.push(`${keyframeTriangles}:${data.length}`);
           bytes.deltasAfterKeyframe = 0;
         } else {
           bytes.deltas += data.length;
@@ -83,6 +84,7 @@ try {
           `(${m.triangles} triangles, ${total(m)} bytes: keyframes ${m.keyframes}, deltas ${m.deltas} in ${m.frames} frames, control ${m.text}); ` +
           `deltas after the last keyframe: ${fmt(perAdded)} bytes per added triangle`,
       );
+      if (process.argv.includes('--verbose')) console.log(`    keyframes (triangles:bytes): ${m.keyframeList.join(' ')}`);
     }
     console.log(`  ${surface.name.padEnd(24)} v2 / v1 = ${fmt(perFinal[2] / perFinal[1])}`);
   }
