@@ -88,12 +88,13 @@ bool CollapseMesh::can_collapse(std::uint32_t v, std::uint32_t u) const {
     std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
     if (common != opposite) return false;
     if (on_edge.size() == 2 && on_boundary(u) && on_boundary(v)) return false;
-    // An opposite vertex with only the two triangles on u-v (a tetrahedron, or a fan of two on
-    // the boundary) would be left with a degenerate fan.
+    // Each opposite vertex loses its triangle on u-v. An interior one must keep three (two would
+    // be a degenerate fan, two triangles folded onto each other); one on the boundary, one (an
+    // ear: where the surface meets the box near a lattice corner it sits on, its three triangles
+    // must be able to become two, or the zero-length edge there stays).
     for (std::uint32_t o : opposite) {
-        if (incident_[o].size() <= 2 || (on_edge.size() == 2 && incident_[o].size() <= 3)) {
-            return false;
-        }
+        const std::size_t keeps = on_boundary(o) ? 1 : 3;
+        if (incident_[o].size() < keeps + 1) return false;
     }
     for (std::uint32_t t : incident_[v]) {
         const Triangle& tri = mesh_.triangles[t];
