@@ -50,6 +50,8 @@ CollapseMesh::CollapseMesh(Mesh& mesh, std::span<const std::uint8_t> box_faces)
 }
 
 std::vector<std::uint32_t> CollapseMesh::triangles_on_edge(std::uint32_t a, std::uint32_t b) const {
+    // Scan the shorter fan: after many collapses one end can have hundreds of triangles.
+    if (incident_[b].size() < incident_[a].size()) std::swap(a, b);
     std::vector<std::uint32_t> result;
     for (std::uint32_t t : incident_[a]) {
         if (contains(mesh_.triangles[t], b)) result.push_back(t);
@@ -70,8 +72,22 @@ std::vector<std::uint32_t> CollapseMesh::neighbours(std::uint32_t v) const {
 }
 
 bool CollapseMesh::on_boundary(std::uint32_t v) const {
-    for (std::uint32_t w : neighbours(v)) {
-        if (triangles_on_edge(v, w).size() == 1) return true;
+    // An edge v-w is on the boundary when one triangle has it: w appears once among the other
+    // corners of v's triangles (twice for an interior edge). Sorting them is O(k log k) in v's
+    // valence k, where asking triangles_on_edge for each neighbour would be O(k^2).
+    std::vector<std::uint32_t> others;
+    others.reserve(2 * incident_[v].size());
+    for (std::uint32_t t : incident_[v]) {
+        for (std::uint32_t w : mesh_.triangles[t]) {
+            if (w != v) others.push_back(w);
+        }
+    }
+    std::sort(others.begin(), others.end());
+    for (std::size_t i = 0; i < others.size();) {
+        std::size_t j = i;
+        while (j < others.size() && others[j] == others[i]) ++j;
+        if (j - i == 1) return true;
+        i = j;
     }
     return false;
 }
