@@ -78,15 +78,17 @@ class Overlay {
         if (auto it = stars_.find(v); it != stars_.end()) return it->second;
         return held_.star(v);
     }
-    /// The triangle holding the directed edge p -> q, if any.
+    /// The triangle holding the directed edge p -> q, if any; where several do (a non-manifold
+    /// edge), the one with the smallest id, whatever the order of the star.
     std::optional<std::uint64_t> holding(std::uint32_t p, std::uint32_t q) const {
+        std::optional<std::uint64_t> found;
         for (std::uint64_t id : star(p)) {
             const Corners& c = *triangle(id);
             for (int k = 0; k < 3; ++k) {
-                if (c[k] == p && c[(k + 1) % 3] == q) return id;
+                if (c[k] == p && c[(k + 1) % 3] == q && (!found || id < *found)) found = id;
             }
         }
-        return std::nullopt;
+        return found;
     }
     void remove(std::uint64_t id) {
         const Corners c = *triangle(id);
