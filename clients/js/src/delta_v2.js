@@ -281,13 +281,14 @@ function result(header, { overlay, moved: movedIds }) {
   for (const v of movedIds) if (overlay.star(v).length > 0) list(v);
   const positions = new Float32Array(3 * globalIds.length);
   const normals = new Float32Array(3 * globalIds.length);
-  globalIds.forEach((v, p) => {
-    const { position, normal } = overlay.vertex(v);
-    positions.set(position, 3 * p);
-    normals.set(normal, 3 * p);
+  const values = globalIds.map((v, p) => {
+    const value = overlay.vertex(v);
+    positions.set(value.position, 3 * p);
+    normals.set(value.normal, 3 * p);
+    return value;
   });
   const mesh = added.length > 0 || globalIds.length > 0
-    ? { pointCount: globalIds.length, globalIds: Uint32Array.from(globalIds), positions, normals, faces }
+    ? { pointCount: globalIds.length, globalIds: Uint32Array.from(globalIds), positions, normals, faces, values }
     : null;
   return {
     header: { ...header, removedCount: removed.length, triangleCount: added.length },

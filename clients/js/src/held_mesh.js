@@ -37,9 +37,10 @@ export class HeldMesh {
     for (const id of frame.removed) this.#remove(id);
     const { mesh, triangleIds } = frame;
     if (!mesh) return;
-    const { globalIds, positions, normals, faces } = mesh;
+    const { globalIds, positions, normals, faces, values } = mesh;
     for (let p = 0; p < globalIds.length; ++p) {
-      this.vertices.set(globalIds[p], {
+      // values: the {position, normal} objects decodeDeltaV2 made (the same numbers).
+      this.vertices.set(globalIds[p], values?.[p] ?? {
         position: [positions[3 * p], positions[3 * p + 1], positions[3 * p + 2]],
         normal: [normals[3 * p], normals[3 * p + 1], normals[3 * p + 2]],
       });
