@@ -2,14 +2,16 @@
 // for one session, from sending `create` to the `converged` message, per triangle of the final
 // mesh, in protocol version 1 and version 2 over the same server, side by side. Also the bytes of
 // the deltas after the last keyframe per triangle they added (net: final triangles minus the last
-// keyframe's), and where they went (keyframes, deltas, control messages).
+// keyframe's), and where they went (keyframes, deltas, control messages). The client is the client
+// library (clients/js) with options.protocolVersion 1 or 2, decoding and applying every frame.
 //
 //   (cd tests/server/node && npm ci) && node bench/wire_bytes.mjs [--runs N] [--threads N]
 //
 // It starts build/bin/isomesh-server (or $ISOMESH_BIN_DIR's) itself. Surfaces: the sphere
 // x^2+y^2+z^2=4 at budget 5,000 and the gallery's gyroid (t = 0, box ±6) at 100,000.
 
-import { startServer, WebSocket } from '../tests/server/node/harness.js';
+import { connect } from '../clients/js/src/index.js';
+import { decoder, startServer, WebSocket } from '../tests/server/node/harness.js';
 
 const arg = (name, fallback) => (process.argv.includes(name) ? process.argv[process.argv.indexOf(name) + 1] : fallback);
 const runs = Number(arg('--runs', '3'));
@@ -20,45 +22,56 @@ const SURFACES = [
   { name: 'gyroid, budget 100,000', expression: 'sin(x)cos(y)+sin(y)cos(z)+sin(z)cos(x)=t', parameters: { t: 0 }, box: [-6, 6, -6, 6, -6, 6], triangles: 100000 },
 ];
 
-/** One session on a fresh connection speaking `version`; resolves with its byte counts. */
-function measure(server, surface, version) {
-  return new Promise((resolve, reject) => {
-    const ws = new WebSocket(server.wsUrl);
-    ws.binaryType = 'nodebuffer';
+/**
+ * One session on a fresh connection of the client library (clients/js) speaking `version`, every
+ * frame decoded and applied; resolves with its byte counts once it converges.
+ */
+async function measure(server, surface, version) {
+  const client = await connect(server.wsUrl, { WebSocket, decoder: await decoder(), protocolVersion: version, route: null, reconnect: false });
+  try {
     const bytes = { keyframes: 0, deltas: 0, text: 0, deltasAfterKeyframe: 0, frames: 0, keyframeList: [] };
     let keyframeTriangles = 0;
-    const timer = setTimeout(() => reject(new Error(`${surface.name}: no convergence within 120 s`)), 120000);
-    ws.on('open', () => {
-      const create = { v: version, type: 'create', id: 1, expression: surface.expression, box: surface.box, constraints: { triangles: surface.triangles } };
-      if (surface.parameters) create.parameters = surface.parameters;
-      ws.send(JSON.stringify(create));
+    let counted = 0;
+    const session = await client.create({ expression: surface.expression, parameters: surface.parameters, box: surface.box, constraints: { triangles: surface.triangles } });
+    const frameBytes = () => {
+      const n = session.stats.bytes - counted;
+      counted = session.stats.bytes;
+      ++bytes.frames;
+      return n;
+    };
+    // Frames the library applied before create() resolved (a small first keyframe may arrive in
+    // the same read as `created`): the first keyframe.
+    if (session.stats.keyframes > 0) {
+      const n = frameBytes();
+      bytes.keyframes += n;
+      keyframeTriangles = session.mesh.triangleCount;
+      bytes.keyframeList.push(`${keyframeTriangles}:${n}`);
+    }
+    session.on('keyframe', (frame) => {
+      if (frame.header.version !== version) throw new Error(`frame of version ${frame.header.version} on a version-${version} connection`);
+      const n = frameBytes();
+      bytes.keyframes += n;
+      keyframeTriangles = frame.header.triangleCount;
+      bytes.keyframeList.push(`${keyframeTriangles}:${n}`);
+      bytes.deltasAfterKeyframe = 0;
     });
-    ws.on('message', (data, isBinary) => {
-      if (isBinary) {
-        ++bytes.frames;
-        if (data[4] !== version) reject(new Error(`frame of version ${data[4]} on a version-${version} connection`));
-        if (data[5] === 1) {
-          bytes.keyframes += data.length;
-          keyframeTriangles = data.readUInt32LE(56);
-          bytes.keyframeList.push(`${keyframeTriangles}:${data.length}`);
-          bytes.deltasAfterKeyframe = 0;
-        } else {
-          bytes.deltas += data.length;
-          bytes.deltasAfterKeyframe += data.length;
-        }
-        return;
-      }
-      bytes.text += data.length;
-      const message = JSON.parse(data.toString());
-      if (message.v !== version) reject(new Error(`message of version ${message.v} on a version-${version} connection`));
-      if (message.type === 'error') reject(new Error(JSON.stringify(message)));
-      if (message.type !== 'converged') return;
-      clearTimeout(timer);
-      ws.close();
-      resolve({ ...bytes, triangles: message.triangles, keyframeTriangles });
+    session.on('delta', (frame) => {
+      if (frame.header.version !== version) throw new Error(`frame of version ${frame.header.version} on a version-${version} connection`);
+      const n = frameBytes();
+      bytes.deltas += n;
+      bytes.deltasAfterKeyframe += n;
     });
-    ws.on('error', reject);
-  });
+    const end = Date.now() + 120000;
+    while (!session.converged) {
+      if (Date.now() > end) throw new Error(`${surface.name}: no convergence within 120 s`);
+      if (session.stats.resyncs > 0) throw new Error(`${surface.name}: the client had to resync`);
+      await new Promise((resolve) => setTimeout(resolve, 5));
+    }
+    bytes.text = client.bytesReceived - session.stats.bytes;
+    return { ...bytes, triangles: session.lastConverged.triangles, keyframeTriangles };
+  } finally {
+    client.close();
+  }
 }
 
 const median = (values) => [...values].sort((a, b) => a - b)[Math.floor(values.length / 2)];

@@ -302,6 +302,33 @@ Result<EncodedFrame> encode_delta(const FrameInfo& info, const DeltaContent& con
     return out;
 }
 
+namespace {
+
+/// A keyframe of an encoded mesh whose decoded triangle d has id ids_in_decoded_order[d]: no id
+/// section when those are consecutive.
+EncodedFrame assemble_keyframe(const FrameInfo& info, EncodedMesh mesh,
+                               const std::vector<std::uint64_t>& ids_in_decoded_order,
+                               const QuantizationGrid& grid) {
+    FrameHeader header = header_for(info);
+    header.triangle_count = static_cast<std::uint32_t>(ids_in_decoded_order.size());
+    const bool consecutive =
+        std::adjacent_find(ids_in_decoded_order.begin(), ids_in_decoded_order.end(),
+                           [](std::uint64_t a, std::uint64_t b) { return b != a + 1; }) ==
+        ids_in_decoded_order.end();
+    Sections sections;
+    if (consecutive && !ids_in_decoded_order.empty()) {
+        header.base_triangle_id = ids_in_decoded_order.front();
+    } else {
+        sections.triangle_ids = encode_id_sequence(ids_in_decoded_order, 0);
+    }
+    sections.mesh = std::move(mesh);
+    EncodedFrame out;
+    out.bytes = assemble(header, sections, grid);
+    return out;
+}
+
+}  // namespace
+
 Result<EncodedFrame> encode_keyframe(const FrameInfo& info, std::span<const Vertex> vertices,
                                      std::span<const Triangle> triangles,
                                      std::span<const std::uint64_t> triangle_ids,
@@ -321,22 +348,34 @@ Result<EncodedFrame> encode_keyframe(const FrameInfo& info, std::span<const Vert
     for (std::size_t i = 0; i < triangles.size(); ++i) {
         ids_in_decoded_order[mesh.value().decoded_index[i]] = triangle_ids[i];
     }
-    FrameHeader header = header_for(info);
-    header.triangle_count = static_cast<std::uint32_t>(triangles.size());
-    const bool consecutive =
-        std::adjacent_find(ids_in_decoded_order.begin(), ids_in_decoded_order.end(),
-                           [](std::uint64_t a, std::uint64_t b) { return b != a + 1; }) ==
-        ids_in_decoded_order.end();
-    Sections sections;
-    if (consecutive && !triangles.empty()) {
-        header.base_triangle_id = ids_in_decoded_order.front();
-    } else {
-        sections.triangle_ids = encode_id_sequence(ids_in_decoded_order, 0);
-    }
-    sections.mesh = std::move(mesh.value());
-    EncodedFrame out;
-    out.bytes = assemble(header, sections, encoding.grid);
+    EncodedFrame out =
+        assemble_keyframe(info, std::move(mesh.value()), ids_in_decoded_order, encoding.grid);
     out.triangle_ids.assign(triangle_ids.begin(), triangle_ids.end());
+    return out;
+}
+
+Result<EncodedFrame> encode_keyframe_numbered(const FrameInfo& info,
+                                              std::span<const Vertex> vertices,
+                                              std::span<const Triangle> triangles,
+                                              std::uint64_t base_triangle_id,
+                                              const MeshEncoding& encoding) {
+    assert(info.kind == FrameKind::keyframe);
+    if (auto error = check_frame_count(triangles.size(), "added")) return *error;
+    if (!triangles.empty() && triangles.size() - 1 > kMaxTriangleId - base_triangle_id)
+        return field_error("triangle ids would exceed 2^53 - 1");
+    MeshEncoding versioned = encoding;
+    versioned.octahedral_normals = info.protocol_version == 2;
+    auto mesh = encode_if_any(vertices, triangles, versioned);
+    if (!mesh) return mesh.error();
+    std::vector<std::uint64_t> ids_in_decoded_order(triangles.size());
+    for (std::size_t d = 0; d < triangles.size(); ++d)
+        ids_in_decoded_order[d] = base_triangle_id + d;
+    std::vector<std::uint64_t> triangle_ids(triangles.size());
+    for (std::size_t i = 0; i < triangles.size(); ++i)
+        triangle_ids[i] = base_triangle_id + mesh.value().decoded_index[i];
+    EncodedFrame out =
+        assemble_keyframe(info, std::move(mesh.value()), ids_in_decoded_order, encoding.grid);
+    out.triangle_ids = std::move(triangle_ids);
     return out;
 }
 

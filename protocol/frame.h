@@ -145,6 +145,15 @@ Result<EncodedFrame> encode_keyframe(const FrameInfo& info, std::span<const Vert
                                      std::span<const std::uint64_t> triangle_ids,
                                      const MeshEncoding& encoding);
 
+/// A keyframe whose triangles take the ids base_triangle_id + their index in the decoded mesh, so
+/// that it carries no id section (section B): out.triangle_ids[i] is triangles[i]'s id. For a mesh
+/// no client holds yet (its ids are free to choose).
+Result<EncodedFrame> encode_keyframe_numbered(const FrameInfo& info,
+                                              std::span<const Vertex> vertices,
+                                              std::span<const Triangle> triangles,
+                                              std::uint64_t base_triangle_id,
+                                              const MeshEncoding& encoding);
+
 struct FrameTriangle {
     std::uint64_t id = 0;
     std::array<std::uint32_t, 3> vertices{};  ///< global vertex ids

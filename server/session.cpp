@@ -557,8 +557,7 @@ void MeshSession::flush_v2(const Inbox& inbox, const MeshDelta& delta,
 }
 
 std::shared_ptr<const Bytes> MeshSession::encode_keyframe(std::uint16_t flags,
-                                                          std::uint32_t version,
-                                                          int protocol) const {
+                                                          std::uint32_t version, int protocol) {
     const KeyframeContent content = protocol == 2 ? wire_v2_.keyframe() : wire_.keyframe();
     protocol::FrameInfo info;
     info.protocol_version = static_cast<std::uint8_t>(protocol);
@@ -569,10 +568,16 @@ std::shared_ptr<const Bytes> MeshSession::encode_keyframe(std::uint16_t flags,
     info.timestamp_us = unix_time_us();
     info.function_version = version;
     const Clock::time_point start = Clock::now();
-    auto encoded = protocol::encode_keyframe(info, content.vertices, content.triangles,
+    const bool renumber = protocol == 2 && wire_v2_.renumberable();
+    auto encoded =
+        renumber ? protocol::encode_keyframe_numbered(info, content.vertices, content.triangles,
+                                                      wire_v2_.next_triangle_id(), encoding_)
+                 : protocol::encode_keyframe(info, content.vertices, content.triangles,
                                              content.wire_ids, encoding_);
     services_.metrics.encode_seconds.observe(seconds_between(start, Clock::now()));
     if (!encoded) throw std::runtime_error("keyframe encoding failed: " + encoded.error().message);
+    if (renumber) wire_v2_.renumber(content.wire_ids, encoded.value().triangle_ids);
+    if (protocol == 2) wire_v2_.sent();
     return std::make_shared<const Bytes>(std::move(encoded.value().bytes));
 }
 

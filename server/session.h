@@ -216,9 +216,10 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     void send_progress(const Inbox& inbox);
     void send_converged(const Inbox& inbox);
     void observe_slice(Clock::time_point start);
-    /// `protocol`: the protocol version of the frame (1: from wire_, 2: from wire_v2_).
+    /// `protocol`: the protocol version of the frame (1: from wire_, 2: from wire_v2_; a mirror
+    /// no client holds yet is numbered in Draco's decoded order, so its keyframe has no ids).
     std::shared_ptr<const Bytes> encode_keyframe(std::uint16_t flags, std::uint32_t version,
-                                                 int protocol = 1) const;
+                                                 int protocol = 1);
     /// Ends the session after a failure: `error` then `closed` to every subscriber.
     void fail(protocol::ErrorCode code, const std::string& message,
               const std::optional<protocol::RequestId>& request_id);

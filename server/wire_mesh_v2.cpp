@@ -38,6 +38,26 @@ void WireMeshV2::reset(const RefinerMesh& mesh, const protocol::QuantizationGrid
     }
     held_.apply(content);
     valid_ = true;
+    renumberable_ = true;
+}
+
+void WireMeshV2::renumber(std::span<const std::uint64_t> from, std::span<const std::uint64_t> to) {
+    protocol::DecodedFrame content;
+    content.header.kind = protocol::FrameKind::keyframe;
+    for (const auto& [id, v] : held_.vertices()) content.vertices.push_back(v);
+    std::unordered_map<std::uint32_t, std::uint64_t> triangle_of;
+    std::unordered_map<std::uint64_t, std::uint32_t> refiner_of;
+    for (std::size_t i = 0; i < from.size(); ++i) {
+        content.triangles.push_back({to[i], *held_.triangle(from[i])});
+        const std::uint32_t refiner = refiner_of_.at(from[i]);
+        triangle_of[refiner] = to[i];
+        refiner_of[to[i]] = refiner;
+        next_triangle_ = std::max(next_triangle_, to[i] + 1);
+    }
+    held_.apply(content);
+    triangle_of_ = std::move(triangle_of);
+    refiner_of_ = std::move(refiner_of);
+    renumberable_ = false;
 }
 
 protocol::Result<protocol::EncodedDeltaV2> WireMeshV2::encode(const protocol::FrameInfo& info,
@@ -70,6 +90,7 @@ protocol::Result<protocol::EncodedDeltaV2> WireMeshV2::encode(const protocol::Fr
     auto encoded =
         protocol::encode_delta_v2(info, held_, change, next_triangle_, next_vertex_, grid_);
     if (!encoded) return encoded;
+    renumberable_ = false;
     const protocol::EncodedDeltaV2& e = encoded.value();
     for (std::uint32_t id : delta.removed_vertices) vertex_of_.erase(id);
     for (std::size_t i = 0; i < delta.added_vertices.size(); ++i)

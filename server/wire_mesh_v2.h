@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <unordered_map>
 
 #include "protocol/delta_v2.h"
@@ -29,6 +30,17 @@ class WireMeshV2 {
     /// The held mesh, triangles in ascending wire id order (a keyframe for one subscriber).
     KeyframeContent keyframe() const;
 
+    /// True from reset() until a frame is made from the mirror: no client holds its ids yet, so
+    /// the first keyframe may number the triangles in Draco's decoded order (no id section).
+    bool renumberable() const { return renumberable_; }
+    /// The first triangle id a renumbering may use.
+    std::uint64_t next_triangle_id() const { return next_triangle_; }
+    /// Gives triangle `from[i]` the id `to[i]` (ids from next_triangle_id() on); precondition:
+    /// renumberable(), `from` lists every triangle.
+    void renumber(std::span<const std::uint64_t> from, std::span<const std::uint64_t> to);
+    /// A frame was made from the mirror: its ids are now the clients'.
+    void sent() { renumberable_ = false; }
+
     /// False after invalidate(): frames went out that this mirror did not follow (no version-2
     /// subscriber then), so the next version-2 keyframe must come from reset().
     bool valid() const { return valid_; }
@@ -44,6 +56,7 @@ class WireMeshV2 {
     std::uint64_t next_triangle_ = 0;
     std::uint32_t next_vertex_ = 0;
     bool valid_ = false;
+    bool renumberable_ = false;
 };
 
 }  // namespace isomesh::server
