@@ -100,6 +100,8 @@ class Overlay {
         for (std::uint32_t v : c) star_mut(v).push_back(id);
     }
     void set_vertex(const Vertex& v) { vertices_[v.id] = v; }
+    /// Whether triangle `id` was held or made in this frame (ids are never reused).
+    bool used(std::uint64_t id) const { return created_.contains(id) || held_.triangle(id); }
 
     /// Bisects edge e of triangle t (and the triangle across it) at the new vertex v: (p, q, r)
     /// becomes (p, v, r) and (v, q, r); (q, p, s) becomes (q, v, s) and (v, p, s). The halves get
@@ -522,8 +524,20 @@ class DeltaDecoder {
     std::optional<Error> loose_vertices();
     std::optional<Error> triangles();
     std::optional<Error> moved();
+    /// A triangle id the frame may give: below 2^53 and never used (a fuzzed base triangle id
+    /// reused a held one, and the stars then named triangles that were gone).
+    std::optional<Error> fresh_triangle_id(std::uint64_t id) const {
+        if (id > kMaxTriangleId) return frame_error("triangle ids exceed 2^53 - 1");
+        if (overlay_.used(id))
+            return frame_error("new triangle " + std::to_string(id) + " reuses an id");
+        return std::nullopt;
+    }
+    /// The next new vertex's id; one the mesh already has would make a split's halves degenerate
+    /// (a fuzzed base vertex id did: the stars then named triangles that were gone).
     std::optional<Error> new_vertex_id(std::uint32_t& id) {
         if (next_vertex_ == UINT32_MAX) return frame_error("vertex ids exceed 2^32 - 1");
+        if (overlay_.vertex(next_vertex_))
+            return frame_error("new vertex " + std::to_string(next_vertex_) + " is already held");
         id = next_vertex_++;
         return std::nullopt;
     }
@@ -577,6 +591,9 @@ std::optional<Error> DeltaDecoder::splits() {
                 return frame_error("split vertex off the grid");
             std::uint32_t id = 0;
             if (auto error = new_vertex_id(id)) return error;
+            for (std::uint64_t k = 0; k < 4; ++k) {
+                if (auto error = fresh_triangle_id(next_triangle_ + k)) return error;
+            }
             overlay_.set_vertex({id, grid_.dequantize(q), grid_.decode_normal(normal)});
             overlay_.split(t, e, id, next_triangle_);
         }
@@ -635,7 +652,7 @@ std::optional<Error> DeltaDecoder::triangles() {
         }
         if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2])
             return frame_error("a triangle repeats a vertex");
-        if (next_triangle_ > kMaxTriangleId) return frame_error("triangle ids exceed 2^53 - 1");
+        if (auto error = fresh_triangle_id(next_triangle_)) return error;
         overlay_.add(next_triangle_++, c);
     }
     return std::nullopt;

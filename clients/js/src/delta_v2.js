@@ -103,6 +103,11 @@ class Overlay {
     return nextId;
   }
 
+  /** Whether triangle `id` was held or made in this frame (ids are never reused). */
+  used(id) {
+    return this.created.has(id) || this.held.triangle(id) !== undefined;
+  }
+
   #starMut(v) {
     let star = this.stars.get(v);
     if (!star) {
@@ -161,7 +166,14 @@ function count(state) {
 
 function newVertexId(state) {
   if (state.nextVertex === MAX_VERTEX_ID) throw frameError('vertex ids exceed 2^32 - 1');
+  if (state.overlay.vertex(state.nextVertex)) throw frameError(`new vertex ${state.nextVertex} is already held`);
   return state.nextVertex++;
+}
+
+/** A triangle id the frame may give: below 2^53 and never used before. */
+function freshTriangleId(state, id) {
+  if (id > MAX_TRIANGLE_ID) throw frameError('triangle ids exceed 2^53 - 1');
+  if (state.overlay.used(id)) throw frameError(`new triangle ${id} reuses an id`);
 }
 
 function splits(state) {
@@ -189,6 +201,7 @@ function splits(state) {
       for (let k = 0; k < 2; ++k) normal[k] += coder.sint(m.normal);
       if (!math.validPoint(q) || !math.validNormal(normal)) throw frameError('split vertex off the grid');
       const id = newVertexId(state);
+      for (let k = 0; k < 4; ++k) freshTriangleId(state, state.nextTriangle + k);
       overlay.vertices.set(id, { position: math.dequantize(q), normal: math.decodeNormal(normal) });
       state.nextTriangle = overlay.split(t, e, id, state.nextTriangle);
     }
@@ -233,7 +246,7 @@ function triangles(state) {
       if (!overlay.vertex(id)) throw frameError(`a triangle uses unknown vertex ${id}`);
     }
     if (c[0] === c[1] || c[1] === c[2] || c[0] === c[2]) throw frameError('a triangle repeats a vertex');
-    if (state.nextTriangle > MAX_TRIANGLE_ID) throw frameError('triangle ids exceed 2^53 - 1');
+    freshTriangleId(state, state.nextTriangle);
     overlay.add(state.nextTriangle++, c);
   }
 }
