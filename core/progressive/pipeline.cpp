@@ -55,7 +55,7 @@ Pipeline::Pipeline(std::shared_ptr<const Field> field, PipelineSettings settings
     settings_.phase1.cancel = nullptr;
     settings_.refine.cancel = nullptr;
     settings_.refine.box = settings_.phase1.box;
-    phase1_ = std::make_unique<Polygonizer>(field_, settings_.phase1);
+    phase1_ = std::make_unique<Polygonizer>(field_, phase1_settings());
 }
 
 Pipeline::~Pipeline() = default;
@@ -226,6 +226,12 @@ void Pipeline::finish_phase1(const WorkBudget& budget) {
     install(std::move(result.mesh), budget, true);
 }
 
+PolygonizeSettings Pipeline::phase1_settings() const {
+    PolygonizeSettings s = settings_.phase1;
+    s.adjacency = false;  // built once the mesh is at the budget (continue_install)
+    return s;
+}
+
 PolygonizeResult Pipeline::phase1_mesh(const WorkBudget& budget) {
     PolygonizeResult result = phase1_->mesh(budget);
     record_phase1_mesh(result);
@@ -249,7 +255,10 @@ Mesh Pipeline::fit_to_budget(Mesh mesh, const WorkBudget& budget) {
     status_.budget_unreachable = false;
     status_.minimum_triangles = 0;
     const std::optional<std::size_t> limit = settings_.refine.constraint.triangle_limit();
-    if (!limit || mesh.triangle_count() <= *limit) return mesh;
+    if (!limit || mesh.triangle_count() <= *limit) {
+        if (mesh.neighbours.empty()) build_adjacency(mesh);  // phase 1 leaves it to us
+        return mesh;
+    }
     // Not cut short by the step's time: a mesh over the budget may not be shown.
     const SimplifyReport report = simplify_to_budget(mesh, box_faces(mesh, settings_.phase1.box),
                                                      *limit, WorkBudget(budget.cancel_flag()));
@@ -300,7 +309,7 @@ void Pipeline::set_roots(Mesh root) {
 void Pipeline::set_field(std::shared_ptr<const Field> field) {
     if (!field) throw std::invalid_argument("Pipeline::set_field: null field");
     field_ = std::move(field);
-    phase1_ = std::make_unique<Polygonizer>(field_, settings_.phase1);
+    phase1_ = std::make_unique<Polygonizer>(field_, phase1_settings());
     final_mesh_.reset();
     intermediate_ = false;
     shadow_.reset();
