@@ -17,6 +17,11 @@ constexpr double kRemeshGrowth = 2.0;
 constexpr double kRefreshShare = 0.5;
 constexpr std::size_t kAllOperations = ~std::size_t{0};
 
+/// The same vertices (positions and normals) and triangles, in the same order.
+bool same_geometry(const Mesh& a, const Mesh& b) {
+    return a.triangles == b.triangles && a.positions == b.positions && a.normals == b.normals;
+}
+
 bool same_topology(const TopologyReport& a, const TopologyReport& b) {
     return a.components == b.components && a.euler_characteristic == b.euler_characteristic &&
            (a.boundary_edges == 0) == (b.boundary_edges == 0);
@@ -216,6 +221,10 @@ void Pipeline::finish_phase1(const WorkBudget& budget) {
     status_.region = result.stats.region_cells > 0;
     status_.certified = result.stats.certified();
     phase1_.reset();
+    // Pending cells of the last intermediate mesh that became leaves unsplit are meshed the same:
+    // the final mesh is often the one shown. Installed again it was a second keyframe of the same
+    // mesh and a reset of its refinement.
+    if (!field_changing_ && installed_ && same_geometry(*installed_, result.mesh)) return;
     if (field_changing_ && keeps_moved_mesh(result.mesh)) {
         field_changing_ = false;
         installed_ = std::move(result.mesh);  // refined aside once the moved mesh converged
