@@ -303,8 +303,9 @@ Mesh assemble(const CrossingRoots& crossings, const std::vector<LeafMeshes>& par
 class FrontierMesher {
   public:
     FrontierMesher(EvaluatorPool& workers, const Lattice& lattice, const OctreeSettings& settings,
-                   ValueMap& values, std::vector<FrontierCell> frontier)
-        : workers_(workers),
+                   ValueMap& values, std::vector<FrontierCell> frontier, bool adjacency)
+        : adjacency_(adjacency),
+          workers_(workers),
           lattice_(lattice),
           settings_(settings),
           values_(values),
@@ -498,7 +499,7 @@ class FrontierMesher {
     }
 
     void finish() {
-        build_adjacency(result_.mesh);
+        if (adjacency_) build_adjacency(result_.mesh);
         stage_ = Stage::done;
     }
 
@@ -607,6 +608,7 @@ class FrontierMesher {
         return static_cast<std::size_t>(it - leaves_.begin());
     }
 
+    bool adjacency_;  // build the mesh's adjacency at the end (PolygonizeSettings::adjacency)
     EvaluatorPool& workers_;
     const Lattice& lattice_;
     const OctreeSettings& settings_;
@@ -703,8 +705,9 @@ std::optional<PolygonizeResult> Polygonizer::mesh_slice(const WorkBudget& budget
         slicing_->points_before = pool_.point_evaluations();
         slicing_->intervals_before = pool_.interval_evaluations();
         if (!octree_.found_region()) {
-            slicing_->mesher = std::make_unique<FrontierMesher>(pool_, lattice_, octree_.settings(),
-                                                                values_, octree_.frontier());
+            slicing_->mesher =
+                std::make_unique<FrontierMesher>(pool_, lattice_, octree_.settings(), values_,
+                                                 octree_.frontier(), settings_.adjacency);
         }
     }
     const auto start = std::chrono::steady_clock::now();
