@@ -80,7 +80,7 @@ struct PolygonizeResult {
 void validate(const PolygonizeSettings& settings);
 
 /// Phase 1 a slice at a time. Not thread-safe; its work runs on its own evaluator pool.
-class FrontierMesher;  // polygonizer.cpp
+class FrontierMesher;  // frontier_mesher.h
 
 class Polygonizer {
   public:
