@@ -302,6 +302,10 @@ export class IsomeshClient extends Emitter {
         entry.reject(new IsomeshError('closed', `connection lost before the reply to ${entry.type}`));
       }
     }
+    // Frames of the lost connection not applied yet are dropped: every session subscribes again
+    // and its keyframe comes first.
+    this.frameQueue = [];
+    this.frameQueueHead = 0;
     for (const session of this.sessions.values()) session._connectionLost();
     this.emit('disconnected', { code: event.code, reason: event.reason });
     this.#scheduleReconnect();
@@ -621,6 +625,10 @@ export class Session extends Emitter {
 
   /** The connection dropped: the mesh stays on hand, not known to be final until resubscribed. */
   _connectionLost() {
+    // The next frame to apply is the keyframe of the new subscription: a session rebuilt after a
+    // restart numbers its frames from 0 again (PROTOCOL.md 3.6), so its `converged` must not be
+    // measured against the sequence of the mesh on hand (which stays shown meanwhile).
+    this.mesh.synchronized = false;
     this.lastConverged = null;
     this.lastProgress = null;
     this.resyncPending = false;

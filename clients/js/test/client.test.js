@@ -342,3 +342,27 @@ test('requests made while disconnected wait for the new connection; close() ends
   assert.equal(client.closed, true);
   await assert.rejects(client.ping(), (e) => e.code === 'closed');
 });
+
+test('after a reconnection the rebuilt session counts its sequences from 0: its converged waits for its own keyframe, frames queued before the drop are dropped', async () => {
+  const client = await connect('ws://h/ws', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder(), reconnectDelaysMs: [1], deferFrames: true });
+  const first = FakeSocket.last;
+  const session = await created(client, first);
+  for (let s = 0; s <= 16; ++s) first.frame({ kind: 'keyframe', sequence: s, triangleIds: [1, 2], mesh: square });
+  client.drainFrames();
+  first.reply({ type: 'converged', session: SESSION, version: 1, sequence: 16, triangles: 2 });
+  assert.ok(session.converged);
+  first.frame({ kind: 'keyframe', sequence: 17, triangleIds: [1, 2], mesh: square }); // queued, then the server dies
+  first.onclose({ code: 1006, reason: '' });
+  assert.equal(session.converged, false, 'not known to be final while disconnected');
+  await until(() => FakeSocket.last !== first && client.connected);
+  const second = FakeSocket.last;
+  second.reply({ type: 'subscribed', id: second.sent[0].id, session: SESSION, ...state });
+  second.frame({ kind: 'keyframe', sequence: 0, triangleIds: [7], mesh: { vertices: square.vertices.slice(0, 3), triangles: [[1, 2, 3]] } });
+  second.reply({ type: 'converged', session: SESSION, version: 1, sequence: 15, triangles: 1 });
+  assert.equal(session.converged, false, 'the converged of the rebuilt session names a frame not applied yet');
+  assert.equal(session.mesh.triangleCount, 2, 'the mesh on hand stays shown meanwhile');
+  assert.equal(client.drainFrames(), 0, "the old connection's queued keyframe is gone");
+  assert.equal(session.mesh.triangleCount, 1, "the rebuilt session's keyframe applied");
+  assert.equal(session.converged, false, 'sequence 0 of 15');
+  client.close();
+});
