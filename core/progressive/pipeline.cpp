@@ -183,10 +183,12 @@ void Pipeline::advance_phase1(const WorkBudget& budget) {
         finish_phase1(budget);
         return;
     }
+    phase1_work_since_mesh_ += budget.elapsed();
     const OctreeCounts& counts = phase1_->counts();
     const bool grown = static_cast<double>(counts.classified) >=
                        kRemeshGrowth * static_cast<double>(classified_at_last_mesh_);
-    if (!field_changing_ && grown &&
+    const bool due = phase1_work_since_mesh_ >= settings_.min_intermediate_interval;
+    if (!field_changing_ && grown && due &&
         counts.pending + counts.leaves + counts.unresolved <= settings_.max_intermediate_cells) {
         intermediate_ = true;
         continue_intermediate(budget);
@@ -249,6 +251,7 @@ PolygonizeResult Pipeline::phase1_mesh(const WorkBudget& budget) {
 
 void Pipeline::record_phase1_mesh(const PolygonizeResult& result) {
     classified_at_last_mesh_ = phase1_->counts().classified;
+    phase1_work_since_mesh_ = 0;
     phase1_stats_ = result.stats;
     status_.unresolved_cells = result.stats.unresolved_cells;
     status_.region = result.stats.region_cells > 0;
@@ -325,6 +328,7 @@ void Pipeline::set_field(std::shared_ptr<const Field> field) {
     simplifying_.reset();
     canonical_pending_ = false;
     classified_at_last_mesh_ = 0;
+    phase1_work_since_mesh_ = 0;
     status_.resolving = true;
     status_.certified = false;
     status_.region = false;

@@ -6,8 +6,9 @@
 //
 // The first step makes a mesh within its budget whatever the function: octree cells are
 // classified for part of the budget, largest first, and the frontier reached is meshed. Later
-// steps go on classifying; the mesh is made again each time the work done has doubled, and once
-// more when every cell is classified (the mesh with the topology guarantee). Each such mesh
+// steps go on classifying; the mesh is made again each time the work done has doubled (and at
+// least min_intermediate_interval of it went by), and once more when every cell is classified (the
+// mesh with the topology guarantee). Each such mesh
 // replaces the whole mesh (the step's delta removes every triangle and adds the new ones:
 // `restarted`). From then on the refiner splits and merges until the constraint is met.
 //
@@ -65,6 +66,13 @@ struct PipelineSettings {
     /// Intermediate phase-1 meshes are made only while the octree has at most this many cells
     /// (beyond, meshing them costs more than it shows; the final mesh is always made).
     std::size_t max_intermediate_cells = 50'000;
+    /// And only after this much of the step budgets' time (their clock's units: microseconds of
+    /// CPU time in the server) went into phase 1 since the last phase-1 mesh. Each is a keyframe of
+    /// the whole mesh: a phase 1 that resolves within a fraction of a second shows its first mesh
+    /// and its final one, not three previews a few tens of milliseconds apart (the gyroid's cost
+    /// 86 kB, a third of its stream at 100,000 triangles); a slow one shows a new mesh at most
+    /// about four times a second.
+    std::int64_t min_intermediate_interval = 250'000;
 };
 
 /// Where the mesh stands.
@@ -174,6 +182,8 @@ class Pipeline {
     std::optional<PolygonizeResult> final_mesh_;   // phase 1's, made, to install next step
     bool intermediate_ = false;  // an intermediate phase-1 mesh is being made (mesh_slice)
     std::size_t classified_at_last_mesh_ = 0;
+    /// Budget units spent in phase-1 steps since the last phase-1 mesh.
+    std::int64_t phase1_work_since_mesh_ = 0;
     bool field_changing_ = false;  // set_field: phase 1 of the new function decides the topology
     PipelineStatus status_;
     PolygonizeStats phase1_stats_;

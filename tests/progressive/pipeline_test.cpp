@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -186,7 +187,9 @@ TEST(Pipeline, step_sends_no_keyframe_of_the_mesh_shown) {
     auto counter = std::make_shared<test::EvaluationCounter>();
     const auto field =
         std::make_shared<test::CountingField>(test::field_of(kGyroid.expression), counter);
-    Pipeline pipeline(field, settings_for(kGyroid.box, 100000));
+    PipelineSettings settings = settings_for(kGyroid.box, 100000);
+    settings.min_intermediate_interval = 0;  // every doubling meshed
+    Pipeline pipeline(field, settings);
     DeltaMesh client;
     std::optional<PolygonizeStats> shown;
     for (int step = 0; step < 100000; ++step) {
@@ -205,6 +208,36 @@ TEST(Pipeline, step_sends_no_keyframe_of_the_mesh_shown) {
     }
     EXPECT_GE(pipeline.status().phase1_meshes, 3u);
     EXPECT_FALSE(pipeline.status().resolving);
+}
+
+// Intermediate phase-1 meshes (keyframes of the whole mesh) are spaced by the work between
+// them: a phase 1 done within min_intermediate_interval shows its first mesh and its final one.
+TEST(Pipeline, step_spaces_intermediate_meshes_by_their_interval) {
+    constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::max();
+    for (const std::int64_t interval : {std::int64_t{0}, std::int64_t{8'000}, kNever}) {
+        SCOPED_TRACE(interval);
+        auto counter = std::make_shared<test::EvaluationCounter>();
+        const auto field =
+            std::make_shared<test::CountingField>(test::field_of(kGyroid.expression), counter);
+        PipelineSettings settings = settings_for(kGyroid.box, 100000);
+        settings.min_intermediate_interval = interval;
+        Pipeline pipeline(field, settings);
+        std::vector<std::int64_t> at;  // evaluation calls at each phase-1 mesh
+        for (int step = 0; step < 100000; ++step) {
+            const std::size_t meshes = pipeline.status().phase1_meshes;
+            const PipelineStep s = pipeline.step(WorkBudget(300, counter->clock()));
+            if (pipeline.status().phase1_meshes > meshes) at.push_back(counter->calls.load());
+            if (s.converged) break;
+        }
+        ASSERT_FALSE(pipeline.status().resolving);
+        if (interval == kNever) {
+            EXPECT_EQ(pipeline.status().phase1_meshes, 2u) << "the first and the final";
+            continue;
+        }
+        EXPECT_GE(at.size(), 3u);  // an intermediate one: its phase 1 classifies for ~50,000 calls
+        for (std::size_t i = 1; i + 1 < at.size(); ++i)  // the final mesh comes when it is ready
+            EXPECT_GE(at[i] - at[i - 1], interval) << "mesh " << i;
+    }
 }
 
 // Regions where the equation holds are no surface: said within the first steps (at once where the
