@@ -20,7 +20,8 @@ using namespace isomesh::load;
 
 constexpr std::string_view kUsage =
     R"(usage: isomesh-load --url ws://HOST:PORT/ws [--sessions N] [--duration S] [--mix FILE]
-                    [--updates-per-s R] [--hold S] [--ramp S] [--threads T] [--json FILE]
+                    [--updates-per-s R] [--hold S] [--ramp S] [--threads T]
+                    [--protocol-version V] [--json FILE]
 
 Opens N sessions on an isomesh server, one WebSocket connection each, for S seconds: a mix of
 surfaces (the viewer's gallery by default), some moving a parameter like a slider. Decodes every
@@ -36,13 +37,17 @@ second, errors, and the server's /metrics before and after. Exits 1 if anything 
                       of the mix created (default 2; 0 = keep it to the end)
   --ramp S            sessions start evenly spread over S seconds (default 1)
   --threads T         I/O threads, which also decode the frames (default 2)
+  --protocol-version V  the protocol version the sessions speak: 2 (default: deltas carry only
+                      what the client lacks, PROTOCOL.md 4.5) or 1
   --json FILE         also write the report as JSON to FILE ('-': stdout, instead of the table)
 )";
 
 constexpr OptionSpec kOptions[] = {
-    {"url", true, false},  {"sessions", true, false},      {"duration", true, false},
-    {"mix", true, false},  {"updates-per-s", true, false}, {"hold", true, false},
-    {"ramp", true, false}, {"threads", true, false},       {"json", true, false}};
+    {"url", true, false},           {"sessions", true, false},
+    {"duration", true, false},      {"mix", true, false},
+    {"updates-per-s", true, false}, {"hold", true, false},
+    {"ramp", true, false},          {"threads", true, false},
+    {"json", true, false},          {"protocol-version", true, false}};
 
 double option_number(const Arguments& args, std::string_view name, double fallback, double lo,
                      double hi, bool whole) {
@@ -75,6 +80,9 @@ LoadOptions parse_options(const Arguments& args) {
     options.threads = static_cast<unsigned>(option_number(args, "threads", 2, 1, 64, true));
     options.user.updates_per_s = option_number(args, "updates-per-s", 2, 0, 1000, false);
     options.user.hold_s = option_number(args, "hold", 2, 0, 3600, false);
+    options.user.protocol_version = static_cast<int>(
+        option_number(args, "protocol-version", isomesh::protocol::kMaxProtocolVersion, 1,
+                      isomesh::protocol::kMaxProtocolVersion, true));
     options.mix = args.has("mix") ? load_mix_file(std::string(*args.value("mix"))) : default_mix();
     return options;
 }

@@ -62,7 +62,7 @@ void VirtualUser::stop() {
 }
 
 void VirtualUser::send(const protocol::ClientMessage& message) {
-    connection_->send_text(protocol::serialize(message));
+    connection_->send_text(protocol::serialize(message, settings_.protocol_version));
 }
 
 void VirtualUser::create_session() {
@@ -117,13 +117,13 @@ void VirtualUser::on_text(const std::string& text) {
 
 void VirtualUser::on_frame(const net::WsMessage& message) {
     const std::uint64_t now_us = system_now_us();
-    auto decoded = protocol::decode_frame(message.bytes());
-    if (!decoded) {
+    auto read = protocol::read_frame_header(message.bytes());
+    if (!read) {
         ++stats_.decode_errors;
-        stats_.record_error("undecodable frame: " + decoded.error().message);
+        stats_.record_error("undecodable frame: " + read.error().message);
         return;
     }
-    const protocol::FrameHeader& header = decoded.value().header;
+    const protocol::FrameHeader& header = read.value();
     if (header.session != session_) return;  // a frame of a session this user has closed
     ++stats_.frames;
     ++(header.kind == protocol::FrameKind::keyframe ? stats_.keyframes : stats_.deltas);
@@ -131,9 +131,15 @@ void VirtualUser::on_frame(const net::WsMessage& message) {
     stats_.frame_latency_ms.push_back(
         (static_cast<double>(now_us) - static_cast<double>(header.timestamp_us)) / 1000.0);
 
-    const auto outcome = replica_.apply(decoded.value());
-    if (outcome == protocol::MeshReplica::Outcome::gap ||
-        outcome == protocol::MeshReplica::Outcome::inconsistent) {
+    // Either version: a version-2 delta is decoded against the replica's mesh.
+    const auto outcome = replica_.receive(message.bytes());
+    if (!outcome) {
+        ++stats_.decode_errors;
+        stats_.record_error("undecodable frame: " + outcome.error().message);
+        return;
+    }
+    if (outcome.value() == protocol::MeshReplica::Outcome::gap ||
+        outcome.value() == protocol::MeshReplica::Outcome::inconsistent) {
         ++stats_.resyncs;
         send(protocol::Resync{std::nullopt, header.session});
     }

@@ -15,6 +15,7 @@
 
 #include "load_mix.h"
 #include "load_stats.h"
+#include "protocol/messages.h"
 #include "protocol/replica.h"
 #include "ws_client.h"
 
@@ -23,6 +24,7 @@ namespace isomesh::load {
 struct UserSettings {
     double updates_per_s = 2;  ///< per slider session; 0: sliders stay still
     double hold_s = 2;         ///< a converged static session lives this long; <= 0: to the end
+    int protocol_version = protocol::kMaxProtocolVersion;  ///< of every message and frame
 };
 
 class VirtualUser : public std::enable_shared_from_this<VirtualUser> {

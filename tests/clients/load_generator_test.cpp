@@ -153,25 +153,29 @@ class LoadRun : public ::testing::Test {
 TEST_F(LoadRun, three_sessions_decode_frames_without_errors) {
     ServerProcess server;
     ASSERT_TRUE(server.ok()) << server.log();
-    const ProgramRun run = run_program(
-        binary("isomesh-load"),
-        {"--url", server.ws_url(), "--sessions", "3", "--duration", "2", "--json", json_path_});
-    EXPECT_EQ(run.status, 0) << run.out << run.err;
-    const nlohmann::json r = report(run);
-    EXPECT_EQ(r["errors"]["total"], 0) << r["errors"].dump();
-    EXPECT_GT(r["frames"]["decoded"].get<int>(), 3);
-    EXPECT_GE(r["time_to_first_mesh_ms"]["count"].get<int>(), 3);
-    EXPECT_GT(r["time_to_first_mesh_ms"]["p50"].get<double>(), 0.0);
-    EXPECT_EQ(r["frame_latency_ms"]["count"], r["frames"]["decoded"]);
-    EXPECT_GT(r["triangles_per_s"].get<double>(), 0.0);
-    EXPECT_GT(r["updates_sent"].get<int>(), 0);  // session 2 of the mix has a slider
-    const auto& metrics = r["server_metrics"];
-    ASSERT_TRUE(metrics["after"].is_object()) << metrics.dump();
-    EXPECT_GE(metrics["after"]["isomesh_sessions_created_total"].get<double>() -
-                  metrics["before"]["isomesh_sessions_created_total"].get<double>(),
-              3.0);
-    // The table names the figures for people.
-    EXPECT_NE(run.out.find("time to first mesh"), std::string::npos) << run.out;
+    for (const char* version : {"1", "2"}) {
+        SCOPED_TRACE(std::string("protocol version ") + version);
+        const ProgramRun run = run_program(
+            binary("isomesh-load"), {"--url", server.ws_url(), "--sessions", "3", "--duration", "2",
+                                     "--protocol-version", version, "--json", json_path_});
+        EXPECT_EQ(run.status, 0) << run.out << run.err;
+        const nlohmann::json r = report(run);
+        EXPECT_EQ(r["errors"]["total"], 0) << r["errors"].dump();
+        EXPECT_GT(r["frames"]["decoded"].get<int>(), 3);
+        EXPECT_GE(r["time_to_first_mesh_ms"]["count"].get<int>(), 3);
+        EXPECT_GT(r["time_to_first_mesh_ms"]["p50"].get<double>(), 0.0);
+        EXPECT_EQ(r["frame_latency_ms"]["count"], r["frames"]["decoded"]);
+        EXPECT_GT(r["triangles_per_s"].get<double>(), 0.0);
+        EXPECT_GT(r["updates_sent"].get<int>(), 0);  // session 2 of the mix has a slider
+        const auto& metrics = r["server_metrics"];
+        ASSERT_TRUE(metrics["after"].is_object()) << metrics.dump();
+        EXPECT_GE(metrics["after"]["isomesh_sessions_created_total"].get<double>() -
+                      metrics["before"]["isomesh_sessions_created_total"].get<double>(),
+                  3.0);
+        EXPECT_EQ(r["resyncs"], 0) << "every delta fitted the replica";
+        // The table names the figures for people.
+        EXPECT_NE(run.out.find("time to first mesh"), std::string::npos) << run.out;
+    }
 }
 
 TEST_F(LoadRun, unreachable_server_fails_the_run) {
@@ -192,6 +196,7 @@ TEST(LoadCommandLine, mistakes_exit_with_two) {
              {"--url", "ws://127.0.0.1:1/ws", "--sessions", "0"},
              {"--url", "ws://127.0.0.1:1/ws", "--duration", "-1"},
              {"--url", "ws://127.0.0.1:1/ws", "--bogus", "1"},
+             {"--url", "ws://127.0.0.1:1/ws", "--protocol-version", "3"},
          }) {
         const ProgramRun run = run_program(binary("isomesh-load"), args);
         EXPECT_EQ(run.status, 2) << run.err;
