@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets with clang into build-fuzz/ and runs each on its corpus under
 # tests/fuzz/<target>/ for a fixed time (FUZZ_SECONDS, default 60 for the parser). New inputs
-# go to a scratch folder, so the committed corpus only changes by hand.
+# go to a scratch folder, so the committed corpus only changes by hand. Asserts are compiled in
+# (ISOMESH_ASSERTS), so a broken invariant is a finding too.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 : "${FUZZ_SECONDS_FRAME_DECODER:=20}"
@@ -11,7 +12,7 @@ if ! command -v clang++ >/dev/null; then
   echo "fuzz: clang++ not found, fuzz targets skipped"; exit 0
 fi
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DISOMESH_FUZZ=ON -DISOMESH_BUILD_BENCH=OFF >/dev/null
+  -DISOMESH_FUZZ=ON -DISOMESH_ASSERTS=ON -DISOMESH_BUILD_BENCH=OFF >/dev/null
 targets=$(cd tests/fuzz && ls -d */ 2>/dev/null | tr -d / || true)
 for t in $targets; do
   cmake --build build-fuzz -j "$(nproc)" --target "fuzz_$t"
