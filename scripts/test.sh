@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # Installs what isomesh needs, builds everything, and runs every test: the unit and integration
-# suites (ctest), then the fuzz targets for a fixed time each, then the JavaScript client's unit
-# tests and the browser test of the viewer (Debian's chromium, playwright-core; screenshots in
+# suites (ctest), the same suites with asserts and AddressSanitizer/UBSan (scripts/test-asan.sh),
+# then the fuzz targets for a fixed time each, then the JavaScript client's unit tests and the
+# browser test of the viewer (Debian's chromium, playwright-core; screenshots in
 # build/test-artifacts/web). Exits non-zero on any failure.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 bash scripts/build.sh -DISOMESH_BUILD_TESTS=ON -DISOMESH_BUILD_BENCH=ON
 ctest --test-dir build --output-on-failure -j "$(nproc)" --timeout 600
+bash scripts/test-asan.sh
 # The server end to end: real isomesh-servers on loopback ports, WebSocket clients applying every
 # frame (tests/server/node: meshes equal to `isomesh mesh`, slow and vanished clients, bad input;
 # sessions surviving kill -9 with SQLite; the deploy/ cluster with Redis and HAProxy). One file at
