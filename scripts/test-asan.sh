@@ -23,8 +23,6 @@ cmake --build build-asan -j "$(nproc)" --target $tests isomesh isomesh-server is
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1
 # Excluded, with the reason: the Blobby tests are slow under the sanitizers (each over 20 s) and
-# run in build/. The two MeshService conformance tests below fail here on timing only (frames
-# counted within a deadline at ASan's speed; no sanitizer or assert fires); they run in build/
-# and should be made timing-independent.
-exclude='Blobby|first_keyframe_meeting_the_constraints_carries_the_converged_flag|no_message_names_a_frame_its_lagging_connection_has_not_received'
+# run in build/.
+exclude='Blobby'
 ctest --test-dir build-asan --output-on-failure -j "$(nproc)" --timeout 600 -E "$exclude"
