@@ -15,7 +15,9 @@ CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWit
   -DISOMESH_FUZZ=ON -DISOMESH_ASSERTS=ON -DISOMESH_BUILD_BENCH=OFF >/dev/null
 targets=$(cd tests/fuzz && ls -d */ 2>/dev/null | tr -d / || true)
 for t in $targets; do
+  built=$SECONDS
   cmake --build build-fuzz -j "$(nproc)" --target "fuzz_$t"
+  echo "fuzz: fuzz_$t built in $((SECONDS - built)) s"
   seconds_var="FUZZ_SECONDS_${t^^}"
   seconds=${!seconds_var:-${FUZZ_SECONDS:-60}}
   scratch=$(mktemp -d)

@@ -20,6 +20,7 @@ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 tests=$(cmake --build build-asan --target help | sed -n 's/^\(test_[a-z_]*\): phony$/\1/p')
 # shellcheck disable=SC2086
 cmake --build build-asan -j "$(nproc)" --target $tests isomesh isomesh-server isomesh-load
+echo "test-asan: built in $SECONDS s"
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1
 # Excluded, with the reason: the Blobby tests are slow under the sanitizers (each over 20 s) and

@@ -6,24 +6,41 @@
 # build/test-artifacts/web). Exits non-zero on any failure.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/install-deps.sh
-bash scripts/build.sh -DISOMESH_BUILD_TESTS=ON -DISOMESH_BUILD_BENCH=ON
-ctest --test-dir build --output-on-failure -j "$(nproc)" --timeout 600
-bash scripts/test-asan.sh
+# Each part's wall time, with the load average (the machine may be shared), and a table of them
+# at the end: the whole command must stay under 30 minutes on 2 cores.
+summary=()
+part() {
+  local name=$1 start=$SECONDS
+  shift
+  "$@"
+  local line
+  line=$(printf '%5d s  %-16s load %s' $((SECONDS - start)) "$name" "$(cut -d' ' -f1-3 /proc/loadavg)")
+  summary+=("$line")
+  echo "test.sh: $line"
+}
+ctest_release() { ctest --test-dir build --output-on-failure -j "$(nproc)" --timeout 600; }
+node_suite() { (cd "$1" && npm ci --no-audit --no-fund && shift && node --test "$@"); }
+part install-deps bash scripts/install-deps.sh
+part build bash scripts/build.sh -DISOMESH_BUILD_TESTS=ON -DISOMESH_BUILD_BENCH=ON
+part ctest ctest_release
+part asan bash scripts/test-asan.sh
 # The server end to end: real isomesh-servers on loopback ports, WebSocket clients applying every
 # frame (tests/server/node: meshes equal to `isomesh mesh`, slow and vanished clients, bad input;
 # sessions surviving kill -9 with SQLite; the deploy/ cluster with Redis and HAProxy). One file at
 # a time: the cluster test's servers would slow the timing-sensitive ones of another file down.
-(cd tests/server/node && npm ci --no-audit --no-fund && node --test --test-concurrency=1)
+part node-server node_suite tests/server/node --test-concurrency=1
 # The protocol's Node check: draco3d decodes frames and Ajv validates messages made by the C++ side.
-(cd tests/protocol/node && npm ci --no-audit --no-fund && node --test)
+part node-protocol node_suite tests/protocol/node
 # The CLI's .glb passes Khronos's gltf-validator and decodes with draco3d to the .ply's triangles.
-(cd tests/export && npm ci --no-audit --no-fund && node --test)
-bash scripts/fuzz.sh
+part node-export node_suite tests/export
+part fuzz bash scripts/fuzz.sh
 # The client library (clients/js: varints, frames, slot table, sessions, frames of the C++
 # encoder) and the viewer's pure modules (clients/web/test).
-node --test clients/js/test/ clients/web/test/
+part node-clients node --test clients/js/test/ clients/web/test/
 # The viewer and its <isomesh-surface> element in Debian's chromium, served by a real isomesh-server on
 # a free loopback port (tests/web: viewer, layout, embed, streaming, reconnect, expiry; screenshots in
 # build/test-artifacts/web).
-node --test tests/web/
+part browser node --test tests/web/
+echo "test.sh: every part passed; wall time per part:"
+printf '  %s\n' "${summary[@]}"
+printf '%7d s  total\n' "$SECONDS"
