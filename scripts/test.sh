@@ -6,15 +6,27 @@
 # build/test-artifacts/web). Exits non-zero on any failure.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-# Each part's wall time, with the load average (the machine may be shared), and a table of them
-# at the end: the whole command must stay under 30 minutes on 2 cores.
+# Each part's wall time and CPU time (user + system, of the processes it waited for), with the
+# load average (the machine may be shared: wall time then grows, CPU time hardly), and a table of
+# them at the end: the whole command must stay under 30 minutes on 2 cores.
 summary=()
+times_file=$(mktemp)
+trap 'rm -f "$times_file"' EXIT
+# cpu_now: the CPU seconds of the processes this shell waited for so far (`times` run in this
+# shell itself: in a subshell, $(...), it would count that subshell's children only).
+children_cpu() {
+  times >"$times_file"
+  cpu_now=$(awk 'NR == 2 { split($1 " " $2, t, /[ ms]+/); print t[1] * 60 + t[2] + t[3] * 60 + t[4] }' "$times_file")
+}
 part() {
-  local name=$1 start=$SECONDS
+  local name=$1 start=$SECONDS cpu line
+  children_cpu
+  cpu=$cpu_now
   shift
   "$@"
-  local line
-  line=$(printf '%5d s  %-16s load %s' $((SECONDS - start)) "$name" "$(cut -d' ' -f1-3 /proc/loadavg)")
+  children_cpu
+  line=$(printf '%5d s  %5.0f s CPU  %-14s load %s' $((SECONDS - start)) \
+    "$(awk "BEGIN { print $cpu_now - $cpu }")" "$name" "$(cut -d' ' -f1-3 /proc/loadavg)")
   summary+=("$line")
   echo "test.sh: $line"
 }
@@ -41,6 +53,7 @@ part node-clients node --test clients/js/test/ clients/web/test/
 # a free loopback port (tests/web: viewer, layout, embed, streaming, reconnect, expiry; screenshots in
 # build/test-artifacts/web).
 part browser node --test tests/web/
-echo "test.sh: every part passed; wall time per part:"
+echo "test.sh: every part passed; wall and CPU time per part:"
 printf '  %s\n' "${summary[@]}"
-printf '%7d s  total\n' "$SECONDS"
+children_cpu
+printf '%7d s  %5.0f s CPU  total\n' "$SECONDS" "$cpu_now"
