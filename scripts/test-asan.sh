@@ -1,21 +1,16 @@
 #!/usr/bin/env bash
 # The C++ suites (ctest) once more, built into build-asan/ with asserts compiled in
 # (ISOMESH_ASSERTS: no NDEBUG, _GLIBCXX_ASSERTIONS) under AddressSanitizer and
-# UndefinedBehaviorSanitizer. Undefined behaviour aborts the test (-fno-sanitize-recover) rather
-# than printing a line nobody reads. Only the ctest suites and the programs they run are built:
-# no benchmarks, fuzzers or Node suites (scripts/test.sh runs those against build/).
+# UndefinedBehaviorSanitizer (ISOMESH_SANITIZE: undefined behaviour aborts the test). Only the
+# ctest suites and the programs they run are built: no benchmarks, fuzzers or Node suites
+# (scripts/test.sh runs those against build/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-sanitize="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
-# GCC's -Wmaybe-uninitialized gives false positives on sanitizer-instrumented code (std::variant
-# in an optional, compared); the Release build keeps the warning.
-warnings="-Wno-maybe-uninitialized"
 # -O1 -g1: the sanitizers' usual optimisation level, with line tables for their stack traces, and
 # faster to compile than RelWithDebInfo's -O2 -g.
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DCMAKE_CXX_FLAGS="$sanitize $warnings" \
-  -DCMAKE_EXE_LINKER_FLAGS="$sanitize" -DISOMESH_ASSERTS=ON -DISOMESH_BUILD_TESTS=ON \
-  -DISOMESH_BUILD_BENCH=OFF >/dev/null
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DISOMESH_SANITIZE=ON -DISOMESH_ASSERTS=ON \
+  -DISOMESH_BUILD_TESTS=ON -DISOMESH_BUILD_BENCH=OFF >/dev/null
 # The test executables, and the programs the CLI and client tests run (tests/CMakeLists.txt).
 tests=$(cmake --build build-asan --target help | sed -n 's/^\(test_[a-z_]*\): phony$/\1/p')
 # shellcheck disable=SC2086
