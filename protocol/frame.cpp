@@ -2,6 +2,8 @@
 #include "protocol/frame.h"
 
 #include <algorithm>
+#include <bit>
+#include <cmath>
 #include <string>
 
 #include "protocol/varint.h"
@@ -30,6 +32,47 @@ T get(std::span<const std::uint8_t> in, std::size_t offset) {
         value |= static_cast<std::uint64_t>(in[offset + i]) << (8 * i);
     }
     return static_cast<T>(value);
+}
+
+float get_float(std::span<const std::uint8_t> in, std::size_t offset) {
+    return std::bit_cast<float>(get<std::uint32_t>(in, offset));
+}
+
+void put_float(std::span<std::uint8_t> out, std::size_t offset, float value) {
+    put(out, offset, std::bit_cast<std::uint32_t>(value));
+}
+
+/// The grid block of a version-2 keyframe (frame.h).
+std::array<std::uint8_t, kGridBlockBytes> grid_block(const QuantizationGrid& grid) {
+    std::array<std::uint8_t, kGridBlockBytes> out{};
+    for (int axis = 0; axis < 3; ++axis) put_float(out, 4 * axis, grid.origin[axis]);
+    put_float(out, 12, grid.range);
+    out[16] = static_cast<std::uint8_t>(grid.position_bits);
+    out[17] = static_cast<std::uint8_t>(grid.normal_bits);
+    return out;
+}
+
+Result<QuantizationGrid> read_grid_block(std::span<const std::uint8_t> in) {
+    QuantizationGrid grid;
+    for (int axis = 0; axis < 3; ++axis) grid.origin[axis] = get_float(in, 4 * axis);
+    grid.range = get_float(in, 12);
+    grid.position_bits = in[16];
+    grid.normal_bits = in[17];
+    const bool finite = std::isfinite(grid.origin.x) && std::isfinite(grid.origin.y) &&
+                        std::isfinite(grid.origin.z) && std::isfinite(grid.range);
+    if (!finite || !(grid.range > 0.0f) || grid.position_bits < 1 || grid.position_bits > 30 ||
+        grid.normal_bits < 2 || grid.normal_bits > 30) {
+        return frame_error("invalid quantization grid");
+    }
+    return grid;
+}
+
+/// The 56-byte header of a version-2 delta (after the shared first 24 bytes).
+FrameHeader read_delta_v2_header(std::span<const std::uint8_t> in, FrameHeader h) {
+    h.base_triangle_id = get<std::uint64_t>(in, 40);
+    h.function_version = get<std::uint32_t>(in, 48);
+    h.base_vertex_id = get<std::uint32_t>(in, 52);
+    return h;
 }
 
 /// Checks that `ids` are distinct and in range; returns them sorted.
@@ -66,13 +109,18 @@ struct Sections {
     EncodedMesh mesh;
 };
 
-std::vector<std::uint8_t> assemble(FrameHeader header, const Sections& s) {
+std::vector<std::uint8_t> assemble(FrameHeader header, const Sections& s,
+                                   const QuantizationGrid& grid) {
     header.removed_bytes = static_cast<std::uint32_t>(s.removed.size());
     header.triangle_ids_bytes = static_cast<std::uint32_t>(s.triangle_ids.size());
     header.mesh_bytes = static_cast<std::uint32_t>(s.mesh.bytes.size());
     header.point_count = s.mesh.point_count;
     std::vector<std::uint8_t> frame(kFrameHeaderBytes);
     write_frame_header(header, std::span<std::uint8_t, kFrameHeaderBytes>(frame));
+    if (header.protocol_version == 2) {
+        const auto block = grid_block(grid);
+        frame.insert(frame.end(), block.begin(), block.end());
+    }
     for (const auto* bytes : {&s.removed, &s.triangle_ids, &s.mesh.bytes}) {
         frame.insert(frame.end(), bytes->begin(), bytes->end());
     }
@@ -112,9 +160,22 @@ Result<std::vector<std::uint64_t>> decode_triangle_ids(const FrameHeader& header
 
 }  // namespace
 
+void write_delta_v2_header(const FrameHeader& h, std::span<std::uint8_t, kDeltaV2HeaderBytes> out) {
+    std::copy(kFrameMagic.begin(), kFrameMagic.end(), out.begin());
+    out[4] = 2;
+    out[5] = static_cast<std::uint8_t>(FrameKind::delta);
+    put(out, 6, h.flags);
+    std::copy(h.session.bytes.begin(), h.session.bytes.end(), out.begin() + 8);
+    put(out, 24, h.sequence);
+    put(out, 32, h.timestamp_us);
+    put(out, 40, h.base_triangle_id);
+    put(out, 48, h.function_version);
+    put(out, 52, h.base_vertex_id);
+}
+
 void write_frame_header(const FrameHeader& h, std::span<std::uint8_t, kFrameHeaderBytes> out) {
     std::copy(kFrameMagic.begin(), kFrameMagic.end(), out.begin());
-    out[4] = static_cast<std::uint8_t>(kProtocolVersion);
+    out[4] = h.protocol_version;
     out[5] = static_cast<std::uint8_t>(h.kind);
     put(out, 6, h.flags);
     std::copy(h.session.bytes.begin(), h.session.bytes.end(), out.begin() + 8);
@@ -138,15 +199,18 @@ std::vector<std::uint8_t> with_session(std::span<const std::uint8_t> frame,
 }
 
 std::uint64_t frame_sequence(std::span<const std::uint8_t> frame) {
-    return frame.size() >= kFrameHeaderBytes ? get<std::uint64_t>(frame, 24) : 0;
+    return frame.size() >= 32 ? get<std::uint64_t>(frame, 24) : 0;
 }
 
 Result<FrameHeader> read_frame_header(std::span<const std::uint8_t> in) {
-    if (in.size() < kFrameHeaderBytes) return frame_error("frame shorter than its 76-byte header");
+    if (in.size() < kDeltaV2HeaderBytes) return frame_error("frame shorter than its header");
     if (!std::equal(kFrameMagic.begin(), kFrameMagic.end(), in.begin())) {
         return frame_error("frame does not start with ISOM");
     }
-    if (in[4] != kProtocolVersion) {
+    const bool short_header = in[4] == 2 && in[5] == static_cast<std::uint8_t>(FrameKind::delta);
+    if (!short_header && in.size() < kFrameHeaderBytes)
+        return frame_error("frame shorter than its 76-byte header");
+    if (in[4] < kProtocolVersion || in[4] > kMaxProtocolVersion) {
         return Error{ErrorCode::unsupported_version,
                      "frame of protocol version " + std::to_string(in[4])};
     }
@@ -155,11 +219,18 @@ Result<FrameHeader> read_frame_header(std::span<const std::uint8_t> in) {
         return frame_error("unknown frame kind " + std::to_string(in[5]));
     }
     FrameHeader h;
+    h.protocol_version = in[4];
     h.kind = static_cast<FrameKind>(in[5]);
     h.flags = get<std::uint16_t>(in, 6);
     std::copy_n(in.begin() + 8, 16, h.session.bytes.begin());
     h.sequence = get<std::uint64_t>(in, 24);
     h.timestamp_us = get<std::uint64_t>(in, 32);
+    if (h.protocol_version == 2 && h.kind == FrameKind::delta) {
+        h = read_delta_v2_header(in, h);
+        if (h.function_version == 0) return frame_error("function version 0");
+        if (h.base_triangle_id > kMaxTriangleId) return frame_error("triangle ids exceed 2^53 - 1");
+        return h;
+    }
     h.base_triangle_id = get<std::uint64_t>(in, 40);
     h.function_version = get<std::uint32_t>(in, 48);
     h.removed_count = get<std::uint32_t>(in, 52);
@@ -188,12 +259,20 @@ Result<FrameHeader> read_frame_header(std::span<const std::uint8_t> in) {
          h.triangle_count - 1 > kMaxTriangleId - h.base_triangle_id)) {
         return frame_error("triangle ids exceed 2^53 - 1");
     }
+    if (h.protocol_version == 2) {
+        if (in.size() < kFrameHeaderBytes + kGridBlockBytes) {
+            return frame_error("version-2 keyframe shorter than its header and grid block");
+        }
+        auto grid = read_grid_block(in.subspan(kFrameHeaderBytes, kGridBlockBytes));
+        if (!grid) return grid.error();
+        h.grid = grid.value();
+    }
     return h;
 }
 
 Result<EncodedFrame> encode_delta(const FrameInfo& info, const DeltaContent& content,
                                   const MeshEncoding& encoding) {
-    assert(info.kind == FrameKind::delta);
+    assert(info.kind == FrameKind::delta && info.protocol_version == 1);
     const auto& triangles = content.triangles;
     const std::uint64_t base = content.base_triangle_id;
     if (auto error = check_frame_count(content.removed.size(), "removed")) return *error;
@@ -219,9 +298,36 @@ Result<EncodedFrame> encode_delta(const FrameInfo& info, const DeltaContent& con
     for (std::size_t i = 0; i < triangles.size(); ++i) {
         out.triangle_ids[i] = base + sections.mesh.decoded_index[i];
     }
-    out.bytes = assemble(header, sections);
+    out.bytes = assemble(header, sections, encoding.grid);
     return out;
 }
+
+namespace {
+
+/// A keyframe of an encoded mesh whose decoded triangle d has id ids_in_decoded_order[d]: no id
+/// section when those are consecutive.
+EncodedFrame assemble_keyframe(const FrameInfo& info, EncodedMesh mesh,
+                               const std::vector<std::uint64_t>& ids_in_decoded_order,
+                               const QuantizationGrid& grid) {
+    FrameHeader header = header_for(info);
+    header.triangle_count = static_cast<std::uint32_t>(ids_in_decoded_order.size());
+    const bool consecutive =
+        std::adjacent_find(ids_in_decoded_order.begin(), ids_in_decoded_order.end(),
+                           [](std::uint64_t a, std::uint64_t b) { return b != a + 1; }) ==
+        ids_in_decoded_order.end();
+    Sections sections;
+    if (consecutive && !ids_in_decoded_order.empty()) {
+        header.base_triangle_id = ids_in_decoded_order.front();
+    } else {
+        sections.triangle_ids = encode_id_sequence(ids_in_decoded_order, 0);
+    }
+    sections.mesh = std::move(mesh);
+    EncodedFrame out;
+    out.bytes = assemble(header, sections, grid);
+    return out;
+}
+
+}  // namespace
 
 Result<EncodedFrame> encode_keyframe(const FrameInfo& info, std::span<const Vertex> vertices,
                                      std::span<const Triangle> triangles,
@@ -233,29 +339,43 @@ Result<EncodedFrame> encode_keyframe(const FrameInfo& info, std::span<const Vert
         return field_error("a keyframe needs one id per triangle");
     }
     if (auto valid = sorted_distinct(triangle_ids, "triangle"); !valid) return valid.error();
-    auto mesh = encode_if_any(vertices, triangles, encoding);
+    MeshEncoding versioned = encoding;
+    versioned.octahedral_normals = info.protocol_version == 2;
+    auto mesh = encode_if_any(vertices, triangles, versioned);
     if (!mesh) return mesh.error();
 
     std::vector<std::uint64_t> ids_in_decoded_order(triangles.size());
     for (std::size_t i = 0; i < triangles.size(); ++i) {
         ids_in_decoded_order[mesh.value().decoded_index[i]] = triangle_ids[i];
     }
-    FrameHeader header = header_for(info);
-    header.triangle_count = static_cast<std::uint32_t>(triangles.size());
-    const bool consecutive =
-        std::adjacent_find(ids_in_decoded_order.begin(), ids_in_decoded_order.end(),
-                           [](std::uint64_t a, std::uint64_t b) { return b != a + 1; }) ==
-        ids_in_decoded_order.end();
-    Sections sections;
-    if (consecutive && !triangles.empty()) {
-        header.base_triangle_id = ids_in_decoded_order.front();
-    } else {
-        sections.triangle_ids = encode_id_sequence(ids_in_decoded_order, 0);
-    }
-    sections.mesh = std::move(mesh.value());
-    EncodedFrame out;
-    out.bytes = assemble(header, sections);
+    EncodedFrame out =
+        assemble_keyframe(info, std::move(mesh.value()), ids_in_decoded_order, encoding.grid);
     out.triangle_ids.assign(triangle_ids.begin(), triangle_ids.end());
+    return out;
+}
+
+Result<EncodedFrame> encode_keyframe_numbered(const FrameInfo& info,
+                                              std::span<const Vertex> vertices,
+                                              std::span<const Triangle> triangles,
+                                              std::uint64_t base_triangle_id,
+                                              const MeshEncoding& encoding) {
+    assert(info.kind == FrameKind::keyframe);
+    if (auto error = check_frame_count(triangles.size(), "added")) return *error;
+    if (!triangles.empty() && triangles.size() - 1 > kMaxTriangleId - base_triangle_id)
+        return field_error("triangle ids would exceed 2^53 - 1");
+    MeshEncoding versioned = encoding;
+    versioned.octahedral_normals = info.protocol_version == 2;
+    auto mesh = encode_if_any(vertices, triangles, versioned);
+    if (!mesh) return mesh.error();
+    std::vector<std::uint64_t> ids_in_decoded_order(triangles.size());
+    for (std::size_t d = 0; d < triangles.size(); ++d)
+        ids_in_decoded_order[d] = base_triangle_id + d;
+    std::vector<std::uint64_t> triangle_ids(triangles.size());
+    for (std::size_t i = 0; i < triangles.size(); ++i)
+        triangle_ids[i] = base_triangle_id + mesh.value().decoded_index[i];
+    EncodedFrame out =
+        assemble_keyframe(info, std::move(mesh.value()), ids_in_decoded_order, encoding.grid);
+    out.triangle_ids = std::move(triangle_ids);
     return out;
 }
 
@@ -263,13 +383,17 @@ Result<DecodedFrame> decode_frame(std::span<const std::uint8_t> frame) {
     auto header = read_frame_header(frame);
     if (!header) return header.error();
     const FrameHeader& h = header.value();
+    if (h.protocol_version == 2 && h.kind == FrameKind::delta) {
+        return frame_error("a version-2 delta is decoded against the mesh it applies to");
+    }
+    const std::size_t start = kFrameHeaderBytes + (h.protocol_version == 2 ? kGridBlockBytes : 0);
     const std::uint64_t expected =
-        std::uint64_t{kFrameHeaderBytes} + h.removed_bytes + h.triangle_ids_bytes + h.mesh_bytes;
+        std::uint64_t{start} + h.removed_bytes + h.triangle_ids_bytes + h.mesh_bytes;
     if (expected != frame.size()) {
         return frame_error("frame of " + std::to_string(frame.size()) + " bytes, header says " +
                            std::to_string(expected));
     }
-    std::size_t offset = kFrameHeaderBytes;
+    std::size_t offset = start;
     const auto removed_section = section(frame, offset, h.removed_bytes);
     const auto ids_section = section(frame, offset, h.triangle_ids_bytes);
     const auto mesh_section = section(frame, offset, h.mesh_bytes);
@@ -283,7 +407,7 @@ Result<DecodedFrame> decode_frame(std::span<const std::uint8_t> frame) {
     if (!ids) return ids.error();
     if (h.triangle_count == 0) return out;
 
-    auto mesh = decode_mesh(mesh_section);
+    auto mesh = decode_mesh(mesh_section, h.protocol_version == 2 ? &h.grid : nullptr);
     if (!mesh) return mesh.error();
     if (mesh.value().triangles.size() != h.triangle_count ||
         mesh.value().point_count != h.point_count) {

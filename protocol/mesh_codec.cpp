@@ -13,6 +13,8 @@
 #include <string>
 #include <unordered_map>
 
+#include "protocol/delta_v2_geometry.h"
+
 #include <draco/compression/decode.h>
 #include <draco/compression/encode.h>
 #include <draco/mesh/mesh.h>
@@ -109,8 +111,28 @@ glm::vec3 sanitized_normal(const glm::vec3& n) {
 
 /// Gives `cloud` one point per vertex with the three attributes of the format (positions clamped
 /// to the grid, non-finite normals zeroed).
-void add_vertex_attributes(std::span<const Vertex* const> points, const QuantizationGrid& grid,
+/// The normal attribute of version-2 payloads: our octahedral codes (delta_v2_geometry.h) as two
+/// int16, so that a client's normals are exactly the values version-2 deltas predict from.
+int add_octahedral_normals(std::span<const Vertex* const> points, const QuantizationGrid& grid,
                            draco::PointCloud& cloud) {
+    const GridMath math(grid);
+    std::vector<std::int16_t> codes(2 * points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const OctNormal code = math.encode_normal(glm::dvec3(sanitized_normal(points[i]->normal)));
+        codes[2 * i] = static_cast<std::int16_t>(code[0]);
+        codes[2 * i + 1] = static_cast<std::int16_t>(code[1]);
+    }
+    const int normal = add_attribute(cloud, draco::GeometryAttribute::GENERIC, 2, draco::DT_INT16,
+                                     points.size(), codes.data());
+    auto metadata = std::make_unique<draco::AttributeMetadata>();
+    metadata->AddEntryString(kGlobalIdMetadataKey, kOctahedralNormalMetadataValue);
+    cloud.AddAttributeMetadata(normal, std::move(metadata));
+    return normal;
+}
+
+void add_vertex_attributes(std::span<const Vertex* const> points, const MeshEncoding& encoding,
+                           draco::PointCloud& cloud) {
+    const QuantizationGrid& grid = encoding.grid;
     const std::size_t count = points.size();
     std::vector<float> positions(3 * count);
     std::vector<float> normals(3 * count);
@@ -125,8 +147,10 @@ void add_vertex_attributes(std::span<const Vertex* const> points, const Quantiza
     cloud.set_num_points(static_cast<std::uint32_t>(count));
     const int position = add_attribute(cloud, draco::GeometryAttribute::POSITION, 3,
                                        draco::DT_FLOAT32, count, positions.data());
-    const int normal = add_attribute(cloud, draco::GeometryAttribute::NORMAL, 3, draco::DT_FLOAT32,
-                                     count, normals.data());
+    const int normal = encoding.octahedral_normals
+                           ? add_octahedral_normals(points, grid, cloud)
+                           : add_attribute(cloud, draco::GeometryAttribute::NORMAL, 3,
+                                           draco::DT_FLOAT32, count, normals.data());
     const int global_id = add_attribute(cloud, draco::GeometryAttribute::GENERIC, 1,
                                         draco::DT_UINT32, count, ids.data());
     assert(cloud.attribute(position)->unique_id() == kPositionAttributeUniqueId);
@@ -139,8 +163,8 @@ void add_vertex_attributes(std::span<const Vertex* const> points, const Quantiza
     cloud.AddAttributeMetadata(global_id, std::move(metadata));
 }
 
-void build_draco_mesh(const PointTable& table, const QuantizationGrid& grid, draco::Mesh& mesh) {
-    add_vertex_attributes(table.points, grid, mesh);
+void build_draco_mesh(const PointTable& table, const MeshEncoding& encoding, draco::Mesh& mesh) {
+    add_vertex_attributes(table.points, encoding, mesh);
     for (const auto& f : table.faces) {
         mesh.AddFace({draco::PointIndex(f[0]), draco::PointIndex(f[1]), draco::PointIndex(f[2])});
     }
@@ -212,10 +236,49 @@ const draco::PointAttribute* find_global_id_attribute(const draco::PointCloud& m
                           draco::DT_UINT32, 1);
 }
 
-/// Every point's vertex, in point order.
-Result<std::vector<Vertex>> read_points(const draco::PointCloud& cloud) {
+/// The points of a version-2 payload: normals from octahedral codes (int16 x 2, metadata name
+/// "octahedral_normal").
+Result<std::vector<Vertex>> read_points_octahedral(const draco::PointCloud& cloud,
+                                                   const draco::PointAttribute* position,
+                                                   const QuantizationGrid& grid) {
+    const int normal_id =
+        cloud.GetAttributeIdByMetadataEntry(kGlobalIdMetadataKey, kOctahedralNormalMetadataValue);
+    const draco::PointAttribute* normal =
+        normal_id < 0 ? nullptr
+                      : find_attribute(cloud, cloud.attribute(normal_id)->unique_id(),
+                                       draco::GeometryAttribute::GENERIC, draco::DT_INT16, 2);
+    const auto* global_id = find_global_id_attribute(cloud);
+    if (!position || !normal || !global_id) {
+        return frame_error(
+            "payload lacks a float32 position, int16 octahedral_normal or uint32 global_id "
+            "attribute");
+    }
+    const GridMath math(grid);
+    std::vector<Vertex> points;
+    points.reserve(cloud.num_points());
+    for (std::uint32_t p = 0; p < cloud.num_points(); ++p) {
+        const draco::PointIndex point(p);
+        std::array<float, 3> xyz{};
+        std::array<std::int16_t, 2> code{};
+        std::array<std::uint32_t, 1> id{};
+        if (!position->GetValue<float, 3>(position->mapped_index(point), &xyz) ||
+            !normal->GetValue<std::int16_t, 2>(normal->mapped_index(point), &code) ||
+            !global_id->GetValue<std::uint32_t, 1>(global_id->mapped_index(point), &id)) {
+            return frame_error("payload attribute data is truncated");
+        }
+        const OctNormal oct{code[0], code[1]};
+        if (!math.valid(oct)) return frame_error("octahedral normal out of range");
+        points.push_back({id[0], glm::vec3(xyz[0], xyz[1], xyz[2]), math.decode_normal(oct)});
+    }
+    return points;
+}
+
+/// Every point's vertex, in point order. `grid`: the grid of octahedral normals (version 2).
+Result<std::vector<Vertex>> read_points(const draco::PointCloud& cloud,
+                                        const QuantizationGrid* grid) {
     const auto* position = find_attribute(cloud, kPositionAttributeUniqueId,
                                           draco::GeometryAttribute::POSITION, draco::DT_FLOAT32, 3);
+    if (grid) return read_points_octahedral(cloud, position, *grid);
     const auto* normal = find_attribute(cloud, kNormalAttributeUniqueId,
                                         draco::GeometryAttribute::NORMAL, draco::DT_FLOAT32, 3);
     const auto* global_id = find_global_id_attribute(cloud);
@@ -241,8 +304,8 @@ Result<std::vector<Vertex>> read_points(const draco::PointCloud& cloud) {
 }
 
 /// Reads every point's vertex, then welds points by global id.
-Result<DecodedMesh> read_draco_mesh(const draco::Mesh& mesh) {
-    auto points = read_points(mesh);
+Result<DecodedMesh> read_draco_mesh(const draco::Mesh& mesh, const QuantizationGrid* grid) {
+    auto points = read_points(mesh, grid);
     if (!points) return points.error();
     DecodedMesh out;
     out.point_count = mesh.num_points();
@@ -301,7 +364,7 @@ Result<EncodedMesh> encode_mesh(std::span<const Vertex> vertices,
     auto table = build_point_table(vertices, triangles);
     if (!table) return table.error();
     draco::Mesh mesh;
-    build_draco_mesh(table.value(), encoding.grid, mesh);
+    build_draco_mesh(table.value(), encoding, mesh);
 
     draco::Encoder encoder;
     encoder.SetEncodingMethod(draco::MESH_EDGEBREAKER_ENCODING);
@@ -312,7 +375,7 @@ Result<EncodedMesh> encode_mesh(std::span<const Vertex> vertices,
 
     EncodedMesh out;
     out.bytes = bytes_of(buffer);
-    auto decoded = decode_mesh(out.bytes);
+    auto decoded = decode_mesh(out.bytes, encoding.octahedral_normals ? &encoding.grid : nullptr);
     if (!decoded) return Error{ErrorCode::internal, "own payload: " + decoded.error().message};
     auto order = match_decoded_order(triangles, decoded.value().triangles);
     if (!order) return order.error();
@@ -321,7 +384,7 @@ Result<EncodedMesh> encode_mesh(std::span<const Vertex> vertices,
     return out;
 }
 
-Result<DecodedMesh> decode_mesh(std::span<const std::uint8_t> bytes) {
+Result<DecodedMesh> decode_mesh(std::span<const std::uint8_t> bytes, const QuantizationGrid* grid) {
     draco::DecoderBuffer buffer;
     buffer.Init(reinterpret_cast<const char*>(bytes.data()), bytes.size());
     const auto type = draco::Decoder::GetEncodedGeometryType(&buffer);
@@ -331,7 +394,7 @@ Result<DecodedMesh> decode_mesh(std::span<const std::uint8_t> bytes) {
     draco::Decoder decoder;
     auto mesh = decoder.DecodeMeshFromBuffer(&buffer);
     if (!mesh.ok()) return frame_error("Draco: " + mesh.status().error_msg_string());
-    return read_draco_mesh(*mesh.value());
+    return read_draco_mesh(*mesh.value(), grid);
 }
 
 }  // namespace isomesh::protocol

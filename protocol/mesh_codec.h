@@ -28,6 +28,9 @@ inline constexpr std::uint32_t kNormalAttributeUniqueId = 1;
 inline constexpr std::uint32_t kGlobalIdAttributeUniqueId = 2;
 inline constexpr const char* kGlobalIdMetadataKey = "name";
 inline constexpr const char* kGlobalIdMetadataValue = "global_id";
+/// Version-2 payloads: the normal attribute (unique id 1) is GENERIC int16 x 2, octahedral codes
+/// (delta_v2_geometry.h), named by this metadata value (entry `name`).
+inline constexpr const char* kOctahedralNormalMetadataValue = "octahedral_normal";
 
 /// A vertex with its session-wide id. `normal` is a unit vector, or zero where the surface has
 /// none (a zero normal decodes as (1, 0, 0)).
@@ -68,6 +71,8 @@ struct MeshEncoding {
     QuantizationGrid grid;
     int encoding_speed = 2;
     int decoding_speed = 2;
+    /// Version-2 payloads: normals as octahedral codes on grid.normal_bits (exact integers).
+    bool octahedral_normals = false;
 };
 
 struct EncodedMesh {
@@ -94,6 +99,8 @@ struct DecodedMesh {
 /// Decodes a payload made by encode_mesh (or any Draco mesh with the same attributes). Fails
 /// (bad_frame) on anything else: not Draco, not a triangle mesh, missing or mistyped attributes,
 /// a triangle that repeats a vertex, one global id with two different positions or normals.
-Result<DecodedMesh> decode_mesh(std::span<const std::uint8_t> bytes);
+/// `grid`: for a version-2 payload, the grid whose normal bits its octahedral normals use.
+Result<DecodedMesh> decode_mesh(std::span<const std::uint8_t> bytes,
+                                const QuantizationGrid* grid = nullptr);
 
 }  // namespace isomesh::protocol

@@ -171,12 +171,16 @@ std::string dump(const ordered_json& out) {
 
 }  // namespace
 
-std::string serialize(const ClientMessage& message) {
-    return dump(std::visit([](const auto& m) { return write(m); }, message));
+std::string serialize(const ClientMessage& message, int version) {
+    ordered_json out = std::visit([](const auto& m) { return write(m); }, message);
+    out["v"] = version;
+    return dump(out);
 }
 
-std::string serialize(const ServerMessage& message) {
-    return dump(std::visit([](const auto& m) { return write(m); }, message));
+std::string serialize(const ServerMessage& message, int version) {
+    ordered_json out = std::visit([](const auto& m) { return write(m); }, message);
+    out["v"] = version;
+    return dump(out);
 }
 
 }  // namespace isomesh::protocol

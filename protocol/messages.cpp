@@ -581,6 +581,7 @@ struct Envelope {
     std::optional<MessageType> type;
     std::optional<RequestId> id;
     std::optional<Error> error;
+    int version = kProtocolVersion;
 };
 
 Envelope read_envelope(std::string_view text, const ParseLimits& limits, bool from_client) {
@@ -614,10 +615,13 @@ Envelope read_envelope(std::string_view text, const ParseLimits& limits, bool fr
     FieldReader in(e.document, "");
     e.id = read_request_id(in);
     const auto version = in.unsigned_integer("v", true, 0, UINT64_MAX);
-    if (version && *version != static_cast<std::uint64_t>(kProtocolVersion)) {
+    if (version && (*version < static_cast<std::uint64_t>(kProtocolVersion) ||
+                    *version > static_cast<std::uint64_t>(kMaxProtocolVersion))) {
         in.fail(ErrorCode::unsupported_version, "protocol version " + std::to_string(*version) +
-                                                    " is not supported (this peer speaks " +
-                                                    std::to_string(kProtocolVersion) + ")");
+                                                    " is not supported (this peer speaks 1 and " +
+                                                    std::to_string(kMaxProtocolVersion) + ")");
+    } else if (version) {
+        e.version = static_cast<int>(*version);
     }
     const auto type_name = in.string("type", true, 32, ErrorCode::unknown_type);
     if (type_name) {
@@ -690,8 +694,9 @@ std::optional<SessionId> SessionId::from_hex(std::string_view hex) {
 }
 
 Result<ClientMessage, RequestError> parse_client_message(std::string_view text,
-                                                         const ParseLimits& limits) {
+                                                         const ParseLimits& limits, int* version) {
     Envelope e = read_envelope(text, limits, true);
+    if (version) *version = e.version;
     // A message that was never parsed (too large, too deep, not JSON) may still name its id.
     if (e.error && !e.parsed) e.id = scan_request_id(text);
     if (e.error) return RequestError{*e.error, e.id};

@@ -19,6 +19,9 @@ namespace isomesh::protocol {
 /// The protocol version this library speaks: the "v" of every message and the version byte of
 /// every binary frame.
 inline constexpr int kProtocolVersion = 1;
+/// The newest version this library speaks: a connection speaks the version of its first message
+/// (PROTOCOL.md 9), 1 or 2.
+inline constexpr int kMaxProtocolVersion = 2;
 
 /// A session's id: 128 random bits, written in JSON as 32 lowercase hex digits (bytes in order) and
 /// in binary frames as the same 16 bytes.
@@ -320,8 +323,10 @@ std::optional<RequestId> scan_request_id(std::string_view text);
 std::size_t utf8_characters(std::string_view text);
 
 /// Parses a client-to-server message. Unknown fields are rejected (bad_field).
+/// `version`, when given, receives the message's "v" (1 or 2) once it parsed.
 Result<ClientMessage, RequestError> parse_client_message(std::string_view text,
-                                                         const ParseLimits& limits = {});
+                                                         const ParseLimits& limits = {},
+                                                         int* version = nullptr);
 
 /// Parses a server-to-client message. Unknown fields are ignored: servers of the same protocol
 /// version may add fields.
@@ -329,8 +334,9 @@ Result<ServerMessage> parse_server_message(std::string_view text, const ParseLim
 
 /// The JSON text of a message (compact, one line). Preconditions: the message is valid (finite
 /// numbers, a valid box, ...); a message built by the parsers above always is.
-std::string serialize(const ClientMessage& message);
-std::string serialize(const ServerMessage& message);
+/// `version`: the protocol version the message is written in (its "v"; the fields are the same).
+std::string serialize(const ClientMessage& message, int version = kProtocolVersion);
+std::string serialize(const ServerMessage& message, int version = kProtocolVersion);
 
 /// The `error` reply to a rejected request.
 ErrorReply to_reply(const RequestError& rejected);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "protocol/frame.h"
+#include "protocol/held_mesh.h"
 
 namespace isomesh::protocol {
 
@@ -24,32 +25,37 @@ class MeshReplica {
     };
 
     Outcome apply(const DecodedFrame& frame);
+    /// Decodes a frame of either protocol version and applies it. A version-2 delta is decoded
+    /// against this mesh, so only when it is the next one; one that does not fit is
+    /// `inconsistent`. Fails only on a frame whose header is malformed.
+    Result<Outcome> receive(std::span<const std::uint8_t> frame);
 
     bool synchronized() const { return synchronized_; }
     std::uint64_t sequence() const { return sequence_; }
     std::uint32_t function_version() const { return function_version_; }
 
-    std::size_t triangle_count() const { return triangles_.size(); }
-    std::size_t vertex_count() const { return vertices_.size(); }
+    std::size_t triangle_count() const { return held_.triangle_count(); }
+    std::size_t vertex_count() const { return held_.vertex_count(); }
     const std::unordered_map<std::uint64_t, std::array<std::uint32_t, 3>>& triangles() const {
-        return triangles_;
+        return held_.triangles();
     }
-    const std::unordered_map<std::uint32_t, Vertex>& vertices() const { return vertices_; }
+    const std::unordered_map<std::uint32_t, Vertex>& vertices() const { return held_.vertices(); }
+    const HeldMesh& held() const { return held_; }
 
     /// The triangles sorted by id, corners in canonical_rotation, for comparing meshes.
     std::vector<FrameTriangle> sorted_triangles() const;
 
   private:
-    void reset();
-    bool apply_delta(const DecodedFrame& frame);
-    void add_triangles(const DecodedFrame& frame);
+    /// Where a delta with this header stands against the current sequence number (applied: it is
+    /// the next one).
+    Outcome place(const FrameHeader& header);
+    bool consistent(const DecodedFrame& frame) const;
 
     bool synchronized_ = false;
     std::uint64_t sequence_ = 0;
     std::uint32_t function_version_ = 0;
-    std::unordered_map<std::uint64_t, std::array<std::uint32_t, 3>> triangles_;
-    std::unordered_map<std::uint32_t, Vertex> vertices_;
-    std::unordered_map<std::uint32_t, std::uint32_t> uses_;
+    HeldMesh held_;
+    QuantizationGrid grid_;  // of the last version-2 keyframe
 };
 
 }  // namespace isomesh::protocol

@@ -8,7 +8,7 @@ if [ "$(id -u)" -ne 0 ]; then SUDO=sudo; else SUDO=; fi
 packages=(
   build-essential cmake ninja-build pkg-config git
   clang libclang-rt-14-dev clang-format
-  libboost-dev libglm-dev nlohmann-json3-dev libdraco-dev libeigen3-dev
+  libboost-dev libglm-dev nlohmann-json3-dev libdraco-dev libeigen3-dev libabsl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libsqlite3-dev libhiredis-dev redis-server haproxy
   chromium

@@ -28,8 +28,19 @@ Client::Client(std::uint64_t id, std::size_t queue_bytes, std::function<void()> 
                Metrics* metrics)
     : id_(id), queue_(queue_bytes, std::move(wakeup), metrics) {}
 
+bool Client::speak(int version) {
+    // Messages of one connection are handled one at a time: no race between the two stores.
+    if (!version_set_.exchange(true)) {
+        version_.store(version, std::memory_order_relaxed);
+        return true;
+    }
+    return version_.load(std::memory_order_relaxed) == version;
+}
+
 void Client::send(const protocol::ServerMessage& message, bool droppable) {
-    queue_.push_text(std::make_shared<const std::string>(protocol::serialize(message)), droppable);
+    queue_.push_text(
+        std::make_shared<const std::string>(protocol::serialize(message, protocol_version())),
+        droppable);
 }
 
 bool Client::add_subscription(const protocol::SessionId& session) {

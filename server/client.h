@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -54,6 +55,11 @@ class Client {
     /// Forgets every subscription (the connection closed) and returns them.
     std::vector<protocol::SessionId> take_subscriptions();
 
+    /// The protocol version this connection speaks (PROTOCOL.md 9): that of its first message
+    /// (1 until then). False, changing nothing, when `version` differs from an earlier message's.
+    bool speak(int version);
+    int protocol_version() const { return version_.load(std::memory_order_relaxed); }
+
     void set_route(std::optional<Route> route) { route_ = route; }
     const std::optional<Route>& route() const { return route_; }
 
@@ -71,6 +77,8 @@ class Client {
     std::set<protocol::SessionId> subscriptions_;
     std::optional<Route> route_;  // set before the first message
     std::size_t created_ = 0;
+    std::atomic<int> version_{protocol::kProtocolVersion};
+    std::atomic<bool> version_set_{false};
 };
 
 }  // namespace isomesh::server

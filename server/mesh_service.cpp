@@ -186,10 +186,20 @@ std::optional<std::string> MeshService::unready() const {
 
 void MeshService::receive(const std::shared_ptr<Client>& client, std::string_view text) {
     metrics_.messages_received.add();
-    auto parsed = protocol::parse_client_message(text, parse_limits_);
+    int version = protocol::kProtocolVersion;
+    auto parsed = protocol::parse_client_message(text, parse_limits_, &version);
     if (!parsed) {
         Request request{*this, client, parsed.error().id};
         request.error(protocol::to_reply(parsed.error()));
+        return;
+    }
+    if (!client->speak(version)) {
+        Request request{*this, client,
+                        std::visit([](const auto& m) { return m.id; }, parsed.value())};
+        request.error(ErrorCode::unsupported_version,
+                      "this connection speaks protocol version " +
+                          std::to_string(client->protocol_version()) +
+                          " (its first message's); a connection keeps one version");
         return;
     }
     std::visit(

@@ -21,6 +21,11 @@ void gather(DeltaBuilder& batch, const MeshDelta& delta) {
     for (const DeltaTriangle& t : delta.added_triangles) batch.add_triangle(t);
 }
 
+/// The protocol version a subscriber's connection speaks, as an index (0: version 1, 1: 2).
+int protocol_index(const std::shared_ptr<Client>& client) {
+    return client->protocol_version() == 2 ? 1 : 0;
+}
+
 double milliseconds_between(Clock::time_point from, Clock::time_point to) {
     return 1000.0 * seconds_between(from, to);
 }
@@ -354,10 +359,16 @@ void MeshSession::replace_mesh(Inbox& inbox, std::uint32_t version, bool converg
     wire_.reset(mesh.mesh, mesh.triangle_ids, mesh.vertex_ids);
     pending_.take();
     pending_changes_ = 0;
+    prepare_v2(inbox.subscribers, true);
     ++sequence_;
     const Clock::time_point now = Clock::now();
-    auto frame = encode_keyframe(converged ? protocol::frame_flags::converged : 0, version);
-    push_keyframes(inbox.subscribers, frame, now);
+    const std::uint16_t flags = converged ? protocol::frame_flags::converged : 0;
+    std::shared_ptr<const Bytes> frames[2];  // by protocol version, made on first use
+    for (const LiveSubscriber& s : inbox.subscribers) {
+        const int index = protocol_index(s.client);
+        if (!frames[index]) frames[index] = encode_keyframe(flags, version, index + 1);
+        push_keyframes({s}, frames[index], now);
+    }
     wire_version_ = version;
     last_frame_converged_ = converged;
     inbox.keyframes.clear();  // every subscriber just got this one
@@ -435,6 +446,18 @@ const std::shared_ptr<const Bytes>& MeshSession::frame_for(protocol::Access acce
     return frame.view;
 }
 
+bool MeshSession::prepare_v2(const std::vector<LiveSubscriber>& subscribers, bool replaced) {
+    const bool wanted =
+        std::any_of(subscribers.begin(), subscribers.end(),
+                    [](const LiveSubscriber& s) { return protocol_index(s.client); });
+    if (!wanted) {
+        wire_v2_.invalidate();
+    } else if (replaced || !wire_v2_.valid()) {
+        wire_v2_.reset(wire_.refiner_mesh(), encoding_.grid);
+    }
+    return wanted;
+}
+
 void MeshSession::push_keyframes(const std::vector<LiveSubscriber>& to,
                                  const std::shared_ptr<const Bytes>& frame,
                                  Clock::time_point created) {
@@ -444,20 +467,23 @@ void MeshSession::push_keyframes(const std::vector<LiveSubscriber>& to,
 }
 
 void MeshSession::serve_keyframes(const std::vector<KeyframeRequest>& requests) {
-    FrameCopies frames[2];  // without and with the catch_up flag
+    FrameCopies frames[2][2];  // by protocol version; without and with the catch_up flag
     const std::uint16_t converged = converged_ && wire_version_ == current_.state.version
                                         ? protocol::frame_flags::converged
                                         : 0;
     for (const KeyframeRequest& request : requests) {
         auto client = request.client.lock();
         if (!client) continue;
-        auto& frame = frames[request.catch_up ? 1 : 0];
+        const int index = protocol_index(client);
+        auto& frame = frames[index][request.catch_up ? 1 : 0];
         if (!frame.control) {
             const std::uint16_t flags =
                 converged | (request.catch_up ? protocol::frame_flags::catch_up : 0);
+            if (index == 1 && !wire_v2_.valid())
+                wire_v2_.reset(wire_.refiner_mesh(), encoding_.grid);
             // The mirror's content: during a change of function, the version whose frames went
             // out last (the new version's first delta then moves the vertices).
-            frame.control = encode_keyframe(flags, wire_version_);
+            frame.control = encode_keyframe(flags, wire_version_, index + 1);
         }
         const protocol::SessionId& id = id_for(request.access);
         if (client->queue().push_keyframe(id, frame_for(request.access, frame)) &&
@@ -474,7 +500,10 @@ void MeshSession::flush(const Inbox& inbox, bool converged) {
     const bool announce = converged && !last_frame_converged_;
     if (pending_changes_ == 0 && !announce) return;
     pending_changes_ = 0;
-    const WireDelta content = wire_.apply(pending_.take());
+    const MeshDelta delta = pending_.take();
+    const WireDelta content = wire_.apply(delta);
+    // A delta that changes no triangle for version 1 (which re-sends the triangles around moved
+    // vertices) changes nothing a version-2 client sees either.
     if (content.empty() && !announce) return;
     ++sequence_;
     last_frame_converged_ = converged;
@@ -496,7 +525,31 @@ void MeshSession::flush(const Inbox& inbox, bool converged) {
     if (!encoded) throw std::runtime_error("delta encoding failed: " + encoded.error().message);
     wire_.commit_wire_ids(content.refiner_ids, encoded.value().triangle_ids);
     FrameCopies frame{std::make_shared<const Bytes>(std::move(encoded.value().bytes)), nullptr};
+    flush_v2(inbox, delta, info);
     for (const LiveSubscriber& s : inbox.subscribers) {
+        if (protocol_index(s.client) == 1) continue;
+        if (s.client->queue().push_delta(id_for(s.access), frame_for(s.access, frame),
+                                         last_flush_) == OutputQueue::DeltaOutcome::dropped_resync)
+            request_keyframe(s.client, s.access, true);
+    }
+}
+
+void MeshSession::flush_v2(const Inbox& inbox, const MeshDelta& delta,
+                           const protocol::FrameInfo& v1_info) {
+    const bool wanted =
+        std::any_of(inbox.subscribers.begin(), inbox.subscribers.end(),
+                    [](const LiveSubscriber& s) { return protocol_index(s.client); });
+    if (!wanted) wire_v2_.invalidate();
+    if (!wanted || !wire_v2_.valid()) return;  // nobody holds the version-2 mesh: keyframes next
+    protocol::FrameInfo info = v1_info;
+    info.protocol_version = 2;
+    const Clock::time_point start = Clock::now();
+    auto encoded = wire_v2_.encode(info, delta);
+    services_.metrics.encode_seconds.observe(seconds_between(start, Clock::now()));
+    if (!encoded) throw std::runtime_error("delta encoding failed: " + encoded.error().message);
+    FrameCopies frame{std::make_shared<const Bytes>(std::move(encoded.value().bytes)), nullptr};
+    for (const LiveSubscriber& s : inbox.subscribers) {
+        if (protocol_index(s.client) != 1) continue;
         if (s.client->queue().push_delta(id_for(s.access), frame_for(s.access, frame),
                                          last_flush_) == OutputQueue::DeltaOutcome::dropped_resync)
             request_keyframe(s.client, s.access, true);
@@ -504,9 +557,10 @@ void MeshSession::flush(const Inbox& inbox, bool converged) {
 }
 
 std::shared_ptr<const Bytes> MeshSession::encode_keyframe(std::uint16_t flags,
-                                                          std::uint32_t version) const {
-    const KeyframeContent content = wire_.keyframe();
+                                                          std::uint32_t version, int protocol) {
+    const KeyframeContent content = protocol == 2 ? wire_v2_.keyframe() : wire_.keyframe();
     protocol::FrameInfo info;
+    info.protocol_version = static_cast<std::uint8_t>(protocol);
     info.kind = protocol::FrameKind::keyframe;
     info.flags = flags;
     info.session = id_;
@@ -514,10 +568,16 @@ std::shared_ptr<const Bytes> MeshSession::encode_keyframe(std::uint16_t flags,
     info.timestamp_us = unix_time_us();
     info.function_version = version;
     const Clock::time_point start = Clock::now();
-    auto encoded = protocol::encode_keyframe(info, content.vertices, content.triangles,
+    const bool renumber = protocol == 2 && wire_v2_.renumberable();
+    auto encoded =
+        renumber ? protocol::encode_keyframe_numbered(info, content.vertices, content.triangles,
+                                                      wire_v2_.next_triangle_id(), encoding_)
+                 : protocol::encode_keyframe(info, content.vertices, content.triangles,
                                              content.wire_ids, encoding_);
     services_.metrics.encode_seconds.observe(seconds_between(start, Clock::now()));
     if (!encoded) throw std::runtime_error("keyframe encoding failed: " + encoded.error().message);
+    if (renumber) wire_v2_.renumber(content.wire_ids, encoded.value().triangle_ids);
+    if (protocol == 2) wire_v2_.sent();
     return std::make_shared<const Bytes>(std::move(encoded.value().bytes));
 }
 
@@ -571,9 +631,11 @@ void MeshSession::send_converged(const Inbox& inbox) {
 template <class Message>
 void MeshSession::broadcast(const std::vector<LiveSubscriber>& to, Message message,
                             std::optional<std::uint64_t> sequence, bool droppable) {
-    std::shared_ptr<const std::string> texts[2];  // naming the control id, the view id
+    // Naming the control id or the view id, in protocol version 1 or 2.
+    std::shared_ptr<const std::string> texts[2][2];
     for (const LiveSubscriber& s : to) {
-        auto& text = texts[s.access == protocol::Access::view ? 1 : 0];
+        const int version = protocol_index(s.client);
+        auto& text = texts[version][s.access == protocol::Access::view ? 1 : 0];
         if (!text) {
             message.session = id_for(s.access);
             if constexpr (requires { message.access; }) {  // created, updated, subscribed
@@ -583,7 +645,7 @@ void MeshSession::broadcast(const std::vector<LiveSubscriber>& to, Message messa
                                    : std::nullopt;
             }
             text = std::make_shared<const std::string>(
-                protocol::serialize(protocol::ServerMessage(message)));
+                protocol::serialize(protocol::ServerMessage(message), version + 1));
         }
         s.client->queue().push_session_text(id_for(s.access), text, sequence, droppable);
     }

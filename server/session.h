@@ -46,6 +46,7 @@
 #include "server/metrics.h"
 #include "server/watchdog.h"
 #include "server/wire_mesh.h"
+#include "server/wire_mesh_v2.h"
 #include "server/worker_pool.h"
 
 namespace isomesh::server {
@@ -188,6 +189,9 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     Watchdog::Guard arm_eval_limit();
     const std::shared_ptr<const Bytes>& frame_for(protocol::Access access,
                                                   FrameCopies& frame) const;
+    /// Version-2 subscribers are there, and the version-2 mirror follows what they hold.
+    bool prepare_v2(const std::vector<LiveSubscriber>& subscribers, bool replaced);
+    void flush_v2(const Inbox& inbox, const MeshDelta& delta, const protocol::FrameInfo& info);
     void push_keyframes(const std::vector<LiveSubscriber>& to,
                         const std::shared_ptr<const Bytes>& frame, Clock::time_point created);
     /// Sends `message` (about this session) to each of `to`, naming the id each holds; with
@@ -212,7 +216,10 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     void send_progress(const Inbox& inbox);
     void send_converged(const Inbox& inbox);
     void observe_slice(Clock::time_point start);
-    std::shared_ptr<const Bytes> encode_keyframe(std::uint16_t flags, std::uint32_t version) const;
+    /// `protocol`: the protocol version of the frame (1: from wire_, 2: from wire_v2_; a mirror
+    /// no client holds yet is numbered in Draco's decoded order, so its keyframe has no ids).
+    std::shared_ptr<const Bytes> encode_keyframe(std::uint16_t flags, std::uint32_t version,
+                                                 int protocol = 1);
     /// Ends the session after a failure: `error` then `closed` to every subscriber.
     void fail(protocol::ErrorCode code, const std::string& message,
               const std::optional<protocol::RequestId>& request_id);
@@ -250,6 +257,7 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     bool phase1_settled_ = false;    // its classification stopped at the limit
     protocol::MeshEncoding encoding_;
     WireMesh wire_;
+    WireMeshV2 wire_v2_;  // what version-2 subscribers hold
     DeltaBuilder pending_;
     std::size_t pending_changes_ = 0;  // triangles and vertices changed in pending_
     bool version_frame_due_ = false;   // a new version's first frame goes out as soon as it can

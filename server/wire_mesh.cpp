@@ -112,3 +112,21 @@ KeyframeContent WireMesh::keyframe() const {
 }
 
 }  // namespace isomesh::server
+
+namespace isomesh::server {
+
+RefinerMesh WireMesh::refiner_mesh() const {
+    RefinerMesh out;
+    out.vertices.reserve(vertices_.size());
+    for (const auto& [id, vertex] : vertices_) out.vertices.push_back(vertex);
+    std::sort(out.vertices.begin(), out.vertices.end(),
+              [](const protocol::Vertex& a, const protocol::Vertex& b) { return a.id < b.id; });
+    out.triangles.reserve(triangles_.size());
+    for (const auto& [id, triangle] : triangles_)
+        out.triangles.push_back({id, {triangle.vertices}});
+    std::sort(out.triangles.begin(), out.triangles.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    return out;
+}
+
+}  // namespace isomesh::server

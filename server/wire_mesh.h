@@ -35,6 +35,12 @@ struct KeyframeContent {
     std::vector<std::uint64_t> wire_ids;
 };
 
+/// The mesh as the refiner numbers it (for building another wire mirror from this one).
+struct RefinerMesh {
+    std::vector<protocol::Vertex> vertices;                               ///< refiner vertex ids
+    std::vector<std::pair<std::uint32_t, protocol::Triangle>> triangles;  ///< by refiner id
+};
+
 class WireMesh {
   public:
     /// Replaces everything by `mesh`, whose triangle i has refiner id triangle_ids[i] and vertex v
@@ -53,6 +59,8 @@ class WireMesh {
                          std::span<const std::uint64_t> wire_ids);
 
     KeyframeContent keyframe() const;
+    /// The mesh in refiner ids, triangles ascending by refiner id.
+    RefinerMesh refiner_mesh() const;
 
     std::uint64_t next_wire_id() const { return next_wire_id_; }
     std::size_t triangle_count() const { return triangles_.size(); }

@@ -50,6 +50,8 @@ CollapseMesh::CollapseMesh(Mesh& mesh, std::span<const std::uint8_t> box_faces)
 }
 
 std::vector<std::uint32_t> CollapseMesh::triangles_on_edge(std::uint32_t a, std::uint32_t b) const {
+    // Scan the shorter fan: after many collapses one end can have hundreds of triangles.
+    if (incident_[b].size() < incident_[a].size()) std::swap(a, b);
     std::vector<std::uint32_t> result;
     for (std::uint32_t t : incident_[a]) {
         if (contains(mesh_.triangles[t], b)) result.push_back(t);
@@ -70,8 +72,22 @@ std::vector<std::uint32_t> CollapseMesh::neighbours(std::uint32_t v) const {
 }
 
 bool CollapseMesh::on_boundary(std::uint32_t v) const {
-    for (std::uint32_t w : neighbours(v)) {
-        if (triangles_on_edge(v, w).size() == 1) return true;
+    // An edge v-w is on the boundary when one triangle has it: w appears once among the other
+    // corners of v's triangles (twice for an interior edge). Sorting them is O(k log k) in v's
+    // valence k, where asking triangles_on_edge for each neighbour would be O(k^2).
+    std::vector<std::uint32_t> others;
+    others.reserve(2 * incident_[v].size());
+    for (std::uint32_t t : incident_[v]) {
+        for (std::uint32_t w : mesh_.triangles[t]) {
+            if (w != v) others.push_back(w);
+        }
+    }
+    std::sort(others.begin(), others.end());
+    for (std::size_t i = 0; i < others.size();) {
+        std::size_t j = i;
+        while (j < others.size() && others[j] == others[i]) ++j;
+        if (j - i == 1) return true;
+        i = j;
     }
     return false;
 }
@@ -88,12 +104,13 @@ bool CollapseMesh::can_collapse(std::uint32_t v, std::uint32_t u) const {
     std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
     if (common != opposite) return false;
     if (on_edge.size() == 2 && on_boundary(u) && on_boundary(v)) return false;
-    // An opposite vertex with only the two triangles on u-v (a tetrahedron, or a fan of two on
-    // the boundary) would be left with a degenerate fan.
+    // Each opposite vertex loses its triangle on u-v. An interior one must keep three (two would
+    // be a degenerate fan, two triangles folded onto each other); one on the boundary, one (an
+    // ear: where the surface meets the box near a lattice corner it sits on, its three triangles
+    // must be able to become two, or the zero-length edge there stays).
     for (std::uint32_t o : opposite) {
-        if (incident_[o].size() <= 2 || (on_edge.size() == 2 && incident_[o].size() <= 3)) {
-            return false;
-        }
+        const std::size_t keeps = on_boundary(o) ? 1 : 3;
+        if (incident_[o].size() < keeps + 1) return false;
     }
     for (std::uint32_t t : incident_[v]) {
         const Triangle& tri = mesh_.triangles[t];

@@ -46,6 +46,8 @@ struct Quadric {
 
 /// Boundary planes weigh this much more than a triangle's own plane.
 constexpr double kBoundaryWeight = 100.0;
+/// The most triangles a collapse may leave around a vertex (see too_many_neighbours).
+constexpr std::size_t kMaxValence = 16;
 /// Budget checks every this many queue entries.
 constexpr std::size_t kCheckInterval = 256;
 
@@ -85,7 +87,7 @@ class Simplifier {
             queue_.pop();
             if (c.stamp_v != stamps_[c.v] || c.stamp_u != stamps_[c.u]) continue;
             if (mesh_.incident(c.v).empty()) continue;
-            if (!mesh_.can_collapse(c.v, c.u)) {
+            if (too_many_neighbours(c.v, c.u) || !mesh_.can_collapse(c.v, c.u)) {
                 blocked_[c.v].push_back(c);  // until the neighbourhood changes
                 continue;
             }
@@ -128,6 +130,15 @@ class Simplifier {
             if (budget.exhausted() && prepared_vertices_ < quadrics_.size()) return false;
         }
         return true;
+    }
+
+    /// Moving v onto u would give u more than kMaxValence triangles. On flat regions every
+    /// collapse costs nothing, and without a cap the cheapest-first order piles them onto a few
+    /// vertices: fans of slivers (100 triangles around one vertex on colonnade.vm), which are
+    /// poor roots for refinement and make every later test on that vertex slow.
+    bool too_many_neighbours(std::uint32_t v, std::uint32_t u) const {
+        // u keeps its triangles and v's, less the two on u-v counted in both and removed.
+        return mesh_.incident(u).size() + mesh_.incident(v).size() > kMaxValence + 4;
     }
 
     void add_triangle_planes(std::uint32_t t) {

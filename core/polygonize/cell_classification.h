@@ -3,9 +3,9 @@
 #pragma once
 
 #include <cstdint>
-#include <unordered_map>
 
 #include "eval/evaluator.h"
+#include "polygonize/id_tables.h"
 #include "polygonize/lattice.h"
 
 namespace isomesh {
@@ -14,19 +14,18 @@ namespace isomesh {
 /// values already in `known` (read-only, shared between tasks) are not evaluated again.
 class CornerCache {
   public:
-    CornerCache(Evaluator& evaluator, const Lattice& lattice,
-                const std::unordered_map<std::uint64_t, double>* known = nullptr)
+    CornerCache(Evaluator& evaluator, const Lattice& lattice, const ValueMap* known = nullptr)
         : evaluator_(evaluator), lattice_(lattice), known_(known) {}
 
     double value(const glm::u32vec3& p);
     /// The values this cache evaluated (not those of `known`).
-    std::unordered_map<std::uint64_t, double>& values() { return values_; }
+    ValueMap& values() { return values_; }
 
   private:
     Evaluator& evaluator_;
     const Lattice& lattice_;
-    const std::unordered_map<std::uint64_t, double>* known_;
-    std::unordered_map<std::uint64_t, double> values_;
+    const ValueMap* known_;
+    ValueMap values_;
 };
 
 enum class CellVerdict {

@@ -28,8 +28,7 @@ namespace {
 constexpr std::uint64_t kPointMask = (std::uint64_t{1} << 51) - 1;
 }
 
-EdgeSegment crossing_segment(const std::unordered_map<std::uint64_t, double>& values,
-                             const Lattice& lattice, CrossingKey key) {
+EdgeSegment crossing_segment(const ValueMap& values, const Lattice& lattice, CrossingKey key) {
     const int axis = static_cast<int>((key >> 51) & 3u);
     const int depth = static_cast<int>((key >> 53) & 31u);
     const glm::u32vec3 lo = Lattice::unkey(key & kPointMask);
@@ -39,8 +38,7 @@ EdgeSegment crossing_segment(const std::unordered_map<std::uint64_t, double>& va
             values.at(Lattice::key(hi)), axis};
 }
 
-glm::dvec3 approximate_crossing(const std::unordered_map<std::uint64_t, double>& values,
-                                const Lattice& lattice, CrossingKey key) {
+glm::dvec3 approximate_crossing(const ValueMap& values, const Lattice& lattice, CrossingKey key) {
     const EdgeSegment s = crossing_segment(values, lattice, key);
     double t = 0.5;
     if (std::isfinite(s.fa) && std::isfinite(s.fb) && s.fa != s.fb) {

@@ -9,7 +9,6 @@
 #pragma once
 
 #include <cstdint>
-#include <unordered_map>
 
 #include "polygonize/cell_classification.h"
 #include "polygonize/edge_roots.h"
@@ -32,11 +31,9 @@ CrossingKey locate_crossing(CornerCache& values, const Lattice& lattice, const g
                             int axis, int depth, int finest_depth);
 
 /// The step `key` as a segment with its end values (which locate_crossing evaluated).
-EdgeSegment crossing_segment(const std::unordered_map<std::uint64_t, double>& values,
-                             const Lattice& lattice, CrossingKey key);
+EdgeSegment crossing_segment(const ValueMap& values, const Lattice& lattice, CrossingKey key);
 
 /// The linear interpolation of the crossing on its finest step: a first guess of its position.
-glm::dvec3 approximate_crossing(const std::unordered_map<std::uint64_t, double>& values,
-                                const Lattice& lattice, CrossingKey key);
+glm::dvec3 approximate_crossing(const ValueMap& values, const Lattice& lattice, CrossingKey key);
 
 }  // namespace isomesh

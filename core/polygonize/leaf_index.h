@@ -5,9 +5,9 @@
 
 #include <cstdint>
 #include <span>
-#include <unordered_set>
 #include <vector>
 
+#include "polygonize/id_tables.h"
 #include "polygonize/lattice.h"
 
 namespace isomesh {
@@ -35,8 +35,8 @@ class LeafIndex {
     void insert(const CellId& leaf);
     void collect_touching(const CellId& cell, int axis, int side, std::vector<CellId>& out) const;
 
-    std::unordered_set<std::uint64_t> leaves_;
-    std::unordered_set<std::uint64_t> internal_;  // proper ancestors of leaves
+    IdSet leaves_;
+    IdSet internal_;  // proper ancestors of leaves
 };
 
 }  // namespace isomesh

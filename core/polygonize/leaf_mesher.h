@@ -5,13 +5,13 @@
 
 #include <array>
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
 #include "eval/evaluator.h"
 #include "polygonize/crossing_vertices.h"
+#include "polygonize/id_tables.h"
 #include "polygonize/lattice.h"
 #include "polygonize/leaf_index.h"
 
@@ -37,9 +37,9 @@ struct LeafMeshes {
 struct LeafMeshingInput {
     const Lattice& lattice;
     /// f at every leaf corner and at the ends of every crossing's finest step.
-    const std::unordered_map<std::uint64_t, double>& values;
+    const ValueMap& values;
     /// The crossing of every leaf edge whose ends are on different sides, by cell_edge_key.
-    const std::unordered_map<std::uint64_t, CrossingKey>& crossings;
+    const IdMap<CrossingKey>& crossings;
     const LeafIndex& index;
 };
 

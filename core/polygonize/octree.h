@@ -18,7 +18,6 @@
 #include <cstdint>
 #include <set>
 #include <span>
-#include <unordered_map>
 #include <vector>
 
 #include "polygonize/cell_classification.h"
@@ -27,8 +26,6 @@
 #include "work/work_budget.h"
 
 namespace isomesh {
-
-using ValueMap = std::unordered_map<std::uint64_t, double>;
 
 struct OctreeSettings {
     /// Every cell down to min_depth is examined (so that no coarse cell hides a surface that

@@ -40,6 +40,11 @@ struct PolygonizeSettings {
     std::size_t max_cells = 2'000'000;
     /// Worker threads; 0 = one per hardware thread. The output does not depend on it.
     int threads = 0;
+    /// Fill in the mesh's neighbours and base edges (mesh.h). false leaves them empty for a
+    /// caller that changes the mesh first and builds them after (mesh/build_adjacency): the
+    /// pipeline simplifies a large phase-1 mesh to the budget, and on the blobby cube's 712,536
+    /// triangles they took 0.33 s in one step.
+    bool adjacency = true;
     /// Checked regularly: when it becomes true, polygonize returns early with an empty mesh and
     /// stats.cancelled set. May be null.
     const std::atomic<bool>* cancel = nullptr;
@@ -75,7 +80,7 @@ struct PolygonizeResult {
 void validate(const PolygonizeSettings& settings);
 
 /// Phase 1 a slice at a time. Not thread-safe; its work runs on its own evaluator pool.
-class FrontierMesher;  // polygonizer.cpp
+class FrontierMesher;  // frontier_mesher.h
 
 class Polygonizer {
   public:

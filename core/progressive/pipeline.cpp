@@ -17,6 +17,11 @@ constexpr double kRemeshGrowth = 2.0;
 constexpr double kRefreshShare = 0.5;
 constexpr std::size_t kAllOperations = ~std::size_t{0};
 
+/// The same vertices (positions and normals) and triangles, in the same order.
+bool same_geometry(const Mesh& a, const Mesh& b) {
+    return a.triangles == b.triangles && a.positions == b.positions && a.normals == b.normals;
+}
+
 bool same_topology(const TopologyReport& a, const TopologyReport& b) {
     return a.components == b.components && a.euler_characteristic == b.euler_characteristic &&
            (a.boundary_edges == 0) == (b.boundary_edges == 0);
@@ -55,7 +60,7 @@ Pipeline::Pipeline(std::shared_ptr<const Field> field, PipelineSettings settings
     settings_.phase1.cancel = nullptr;
     settings_.refine.cancel = nullptr;
     settings_.refine.box = settings_.phase1.box;
-    phase1_ = std::make_unique<Polygonizer>(field_, settings_.phase1);
+    phase1_ = std::make_unique<Polygonizer>(field_, phase1_settings());
 }
 
 Pipeline::~Pipeline() = default;
@@ -216,6 +221,10 @@ void Pipeline::finish_phase1(const WorkBudget& budget) {
     status_.region = result.stats.region_cells > 0;
     status_.certified = result.stats.certified();
     phase1_.reset();
+    // Pending cells of the last intermediate mesh that became leaves unsplit are meshed the same:
+    // the final mesh is often the one shown. Installed again it was a second keyframe of the same
+    // mesh and a reset of its refinement.
+    if (!field_changing_ && installed_ && same_geometry(*installed_, result.mesh)) return;
     if (field_changing_ && keeps_moved_mesh(result.mesh)) {
         field_changing_ = false;
         installed_ = std::move(result.mesh);  // refined aside once the moved mesh converged
@@ -224,6 +233,12 @@ void Pipeline::finish_phase1(const WorkBudget& budget) {
     }
     field_changing_ = false;
     install(std::move(result.mesh), budget, true);
+}
+
+PolygonizeSettings Pipeline::phase1_settings() const {
+    PolygonizeSettings s = settings_.phase1;
+    s.adjacency = false;  // built once the mesh is at the budget (continue_install)
+    return s;
 }
 
 PolygonizeResult Pipeline::phase1_mesh(const WorkBudget& budget) {
@@ -249,7 +264,10 @@ Mesh Pipeline::fit_to_budget(Mesh mesh, const WorkBudget& budget) {
     status_.budget_unreachable = false;
     status_.minimum_triangles = 0;
     const std::optional<std::size_t> limit = settings_.refine.constraint.triangle_limit();
-    if (!limit || mesh.triangle_count() <= *limit) return mesh;
+    if (!limit || mesh.triangle_count() <= *limit) {
+        if (mesh.neighbours.empty()) build_adjacency(mesh);  // phase 1 leaves it to us
+        return mesh;
+    }
     // Not cut short by the step's time: a mesh over the budget may not be shown.
     const SimplifyReport report = simplify_to_budget(mesh, box_faces(mesh, settings_.phase1.box),
                                                      *limit, WorkBudget(budget.cancel_flag()));
@@ -300,7 +318,7 @@ void Pipeline::set_roots(Mesh root) {
 void Pipeline::set_field(std::shared_ptr<const Field> field) {
     if (!field) throw std::invalid_argument("Pipeline::set_field: null field");
     field_ = std::move(field);
-    phase1_ = std::make_unique<Polygonizer>(field_, settings_.phase1);
+    phase1_ = std::make_unique<Polygonizer>(field_, phase1_settings());
     final_mesh_.reset();
     intermediate_ = false;
     shadow_.reset();

@@ -145,6 +145,7 @@ class Pipeline {
     void advance_phase1(const WorkBudget& budget);
     void finish_phase1(const WorkBudget& budget);
     void continue_intermediate(const WorkBudget& budget);
+    PolygonizeSettings phase1_settings() const;
     PolygonizeResult phase1_mesh(const WorkBudget& budget);
     void record_phase1_mesh(const PolygonizeResult& result);
     /// Makes `mesh` (a phase-1 mesh) the refiner's roots, simplified to the budget first where

@@ -84,19 +84,35 @@ void Refiner::Impl::block(std::uint32_t t) {
 
 bool Refiner::Impl::prepare(const SplitPlan& plan) {
     ensure_candidates(plan.chain);
-    bool ok = true;
+    bool ok = true, retried = false;
     for (std::size_t i = 0; i < plan.chain.size(); ++i) {
-        const std::uint32_t t = plan.chain[i];
-        Triangle& T = triangles_[t];
+        Triangle& T = triangles_[plan.chain[i]];
         // The split vertex must not fold the children over (the surface turns sharply between
         // the base edge's ends) nor make one of zero area.
         if (!T.candidate_refused && split_folds(plan, i)) T.candidate_refused = true;
+        if (T.candidate_refused && !T.candidate_retried) {
+            T.candidate_refused = !retry_candidate(plan, i);
+            retried = retried || !T.candidate_refused;
+        }
         if (!T.candidate_refused) continue;
         ok = false;
-        ++counters_.refused_vertices;
-        block(t);  // kept, unsplit, until the function changes
+        refuse(plan.chain[i]);
+    }
+    if (!ok || !retried) return ok;
+    // A retried vertex of chain[i + 1] is the apex of the other half of chain[i]'s diamond,
+    // which was checked with the vertex it replaced.
+    for (std::size_t i = 0; i + 1 < plan.chain.size(); ++i) {
+        if (!split_folds(plan, i)) continue;
+        triangles_[plan.chain[i]].candidate_refused = true;
+        ok = false;
+        refuse(plan.chain[i]);
     }
     return ok;
+}
+
+void Refiner::Impl::refuse(std::uint32_t t) {
+    ++counters_.refused_vertices;
+    block(t);  // kept, unsplit, until the function changes
 }
 
 bool Refiner::Impl::split_folds(const SplitPlan& plan, std::size_t i) const {
@@ -114,6 +130,48 @@ bool Refiner::Impl::split_folds(const SplitPlan& plan, std::size_t i) const {
     }
     return plan.partner != kNone &&
            folds(split_corners(plan.partner), T.candidate, T.candidate_normal);
+}
+
+bool Refiner::Impl::retry_candidate(const SplitPlan& plan, std::size_t i) {
+    const std::uint32_t t = plan.chain[i];
+    // The triangle across the base edge: the diamond partner, or the next of the chain (whose
+    // child across t's base will lie in its plane, up to its own split vertex).
+    const std::uint32_t across = i + 1 < plan.chain.size() ? plan.chain[i + 1] : plan.partner;
+    triangles_[t].candidate_retried = true;
+    const bool diamond = i + 1 == plan.chain.size() && plan.partner != kNone;
+    if (diamond) triangles_[plan.partner].candidate_retried = true;  // the same point
+    // Where the vertex normals at the base's ends diverge (a coarse triangle across a strongly
+    // curved region), their mean leads the search line to a point beside the diamond, whose
+    // children fold. Along the sum of the two faces' unit normals the point stays on the line
+    // through the base midpoint perpendicular to the base in both planes' projections, where
+    // neither triangle's children flip (symmetric: both triangles of a diamond find it).
+    const auto face_normal = [this](std::uint32_t u) {
+        const SplitCorners k = split_corners(u);
+        return unit_or_zero(glm::cross(k.b - k.a, k.c - k.a));
+    };
+    ProjectionRequest request = candidate_request(t);
+    request.direction = face_normal(t) + (across == kNone ? glm::dvec3(0.0) : face_normal(across));
+    const Projection p = project_to_surface(*evaluator_, request, settings_.projection);
+    if (!p.on_surface() || !settings_.box.contains(p.position)) return false;
+    Triangle& T = triangles_[t];
+    const Triangle before = T;
+    T.candidate = p.position;
+    T.candidate_normal = p.normal;
+    T.candidate_gradient_norm = p.gradient_norm;
+    T.candidate_on_surface = true;
+    if (split_folds(plan, i)) {
+        T = before;
+        return false;
+    }
+    if (diamond) {
+        Triangle& P = triangles_[plan.partner];
+        P.candidate = T.candidate;
+        P.candidate_normal = T.candidate_normal;
+        P.candidate_gradient_norm = T.candidate_gradient_norm;
+        P.candidate_on_surface = true;
+        P.candidate_refused = false;
+    }
+    return true;
 }
 
 void Refiner::Impl::execute(const SplitPlan& plan) {
@@ -157,7 +215,9 @@ void Refiner::Impl::bisect(std::uint32_t t, std::uint32_t n) {
         assert(M.on_surface && !T.candidate_refused);  // prepare() refused the plan otherwise
         M.scale = base_length(t);
         M.version = version_;
-        M.fixed_axis = n == kNone ? vertices_[T.v[T.base]].fixed_axis : -1;
+        M.fixed_axes = n == kNone ? face_axes(vertices_[T.v[T.base]].position,
+                                              vertices_[T.v[(T.base + 1) % 3]].position, bounds_)
+                                  : 0;
         M.alive = true;
         delta_.add_vertex(delta_vertex(m));
     }

@@ -34,9 +34,9 @@ double longest_edge(const TriangleGeometry& t) {
 Projection nearest_surface_point(Evaluator& evaluator, const glm::dvec3& p, const glm::dvec3& hint,
                                  double scale, const ProjectionSettings& settings) {
     const Projection newton =
-        project_to_surface(evaluator, {p, glm::dvec3(0.0), 0.0, scale, -1}, settings);
+        project_to_surface(evaluator, {p, glm::dvec3(0.0), 0.0, scale, 0}, settings);
     if (newton.on_surface()) return newton;
-    return project_to_surface(evaluator, {p, hint, 0.0, scale, -1}, settings);
+    return project_to_surface(evaluator, {p, hint, 0.0, scale, 0}, settings);
 }
 
 }  // namespace

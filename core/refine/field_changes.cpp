@@ -89,7 +89,7 @@ void Refiner::Impl::refresh_vertices(std::span<const std::uint32_t> items) {
         // The phase-1 edge length bounds how far a vertex may travel: beyond it the phase-1
         // topology guarantee says nothing, and the fresh phase-1 mesh takes over.
         request.scale = 2.0 * std::max(root_edge_length_, V.scale);
-        request.fixed_axis = V.fixed_axis;
+        request.fixed_axes = V.fixed_axes;
         requests_.push_back(request);
     }
     projections_.resize(requests_.size());

@@ -188,9 +188,11 @@ void Refiner::Impl::load(const Mesh& input) {
             b.scale = std::min(b.scale, length);
             if (T.nb[e] == kNone) {
                 has_boundary_ = true;
-                const std::int8_t axis = face_axis(a.position, b.position, bounds_);
-                if (a.fixed_axis < 0) a.fixed_axis = axis;
-                if (b.fixed_axis < 0) b.fixed_axis = axis;
+                // A vertex where the surface meets an edge of the box has a boundary edge on
+                // each of the two faces: it keeps both coordinates.
+                const std::uint8_t axes = face_axes(a.position, b.position, bounds_);
+                a.fixed_axes |= axes;
+                b.fixed_axes |= axes;
             }
         }
     }

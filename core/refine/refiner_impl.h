@@ -33,7 +33,7 @@ struct Vertex {
     double gradient_norm = 0.0;  // |grad f| at position; 0 when unknown
     double scale = 0.0;  // the length of the edge it bisected (phase-1: shortest incident edge)
     std::uint64_t version = 0;
-    std::int8_t fixed_axis = -1;  // on a face of the meshing box: the coordinate that stays
+    std::uint8_t fixed_axes = 0;  // on faces of the meshing box: the coordinates that stay (bits)
     bool on_surface = true;
     bool alive = false;
 };
@@ -52,6 +52,7 @@ struct Triangle {
     double candidate_gradient_norm = 0.0;
     bool candidate_on_surface = false;
     bool candidate_refused = false;  // no valid split vertex at candidate_version: not split
+    bool candidate_retried = false;  // the face-normal candidate was tried at candidate_version
     std::uint64_t candidate_version = 0;
     double error = 0.0;
     std::uint64_t error_version = 0;
@@ -122,15 +123,18 @@ inline glm::dvec3 unit_or_zero(const glm::dvec3& v) {
     return length > 0.0 && std::isfinite(length) ? v / length : glm::dvec3(0.0);
 }
 
-/// The axis of the face of the meshing box that a boundary edge a-b lies on, or -1: phase 1 puts
-/// such edges exactly on the box, which the mesh's bounding box `bounds` touches. (A plane such
-/// as x = 0 has every vertex at x = 0: that axis, flat in `bounds`, is not a face.)
-inline std::int8_t face_axis(const glm::dvec3& a, const glm::dvec3& b, const Box& bounds) {
-    for (int k = 0; k < 3; ++k)
+/// The axes (bit k for axis k) of the faces of the meshing box that a boundary edge a-b lies on:
+/// phase 1 puts such edges exactly on the box, which the mesh's bounding box `bounds` touches.
+/// Two bits for an edge along an edge of the box. (A plane such as x = 0 has every vertex at
+/// x = 0: that axis, flat in `bounds`, is not a face.)
+inline std::uint8_t face_axes(const glm::dvec3& a, const glm::dvec3& b, const Box& bounds) {
+    std::uint8_t axes = 0;
+    for (int k = 0; k < 3; ++k) {
         if (a[k] == b[k] && bounds.lo[k] < bounds.hi[k] &&
             (a[k] == bounds.lo[k] || a[k] == bounds.hi[k]))
-            return static_cast<std::int8_t>(k);
-    return -1;
+            axes |= static_cast<std::uint8_t>(1u << k);
+    }
+    return axes;
 }
 
 /// The forced splits one split needs: chain[0] is the triangle asked for, chain[i + 1] the base
@@ -236,6 +240,8 @@ class Refiner::Impl {
     /// Projects the split vertices of the plan; false (and the triangles without one moved to
     /// the blocked queue) when some has none on the surface inside the box.
     bool prepare(const SplitPlan& plan);
+    /// Counts t's split as refused and keeps it unsplit (the blocked queue).
+    void refuse(std::uint32_t t);
     /// A triangle about to be bisected: its base edge a-b, apex c, and their normals.
     struct SplitCorners {
         glm::dvec3 a, b, c, na, nb, nc;
@@ -248,6 +254,10 @@ class Refiner::Impl {
                       const glm::dvec3& m_normal);
     /// folds() for both halves of the diamond chain[i]'s split vertex bisects.
     bool split_folds(const SplitPlan& plan, std::size_t i) const;
+    /// Where the base midpoint projected along the vertex normals folds the diamond, tries it
+    /// along the diamond's face normals instead; true (and chain[i]'s candidate, and its
+    /// partner's, replaced) when that one is valid.
+    bool retry_candidate(const SplitPlan& plan, std::size_t i);
     void execute(const SplitPlan& plan);
     void bisect(std::uint32_t t, std::uint32_t partner);
     std::uint32_t make_child(std::uint32_t record, std::array<std::uint32_t, 3> v,

@@ -18,8 +18,11 @@ bool finite(const glm::dvec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
-glm::dvec3 without_axis(glm::dvec3 v, int axis) {
-    if (axis >= 0 && axis < 3) v[axis] = 0.0;
+/// v with the components of the axes in `axes` (bit k for axis k) zeroed.
+glm::dvec3 without_axes(glm::dvec3 v, std::uint8_t axes) {
+    for (int k = 0; k < 3; ++k) {
+        if (axes & (1u << k)) v[k] = 0.0;
+    }
     return v;
 }
 
@@ -32,7 +35,7 @@ glm::dvec3 unit_or_zero(const glm::dvec3& v) {
 
 SecantSearch::SecantSearch(const ProjectionRequest& request, const ProjectionSettings& settings)
     : start_(request.start),
-      direction_(unit_or_zero(without_axis(request.direction, request.fixed_axis))),
+      direction_(unit_or_zero(without_axes(request.direction, request.fixed_axes))),
       slope_(request.slope),
       radius_(settings.max_displacement * request.scale),
       tolerance_(settings.tolerance * request.scale),
@@ -138,7 +141,7 @@ class Projector {
     // checked with the gradient, which also gives the normal.
     bool check(const glm::dvec3& p, ProjectionMethod method) {
         const ValueGradient vg = evaluate(p);
-        const double g = glm::length(without_axis(vg.gradient, request_.fixed_axis));
+        const double g = glm::length(without_axes(vg.gradient, request_.fixed_axes));
         if (!std::isfinite(vg.value) || !(g > 0.0) || !(std::abs(vg.value) <= tolerance_ * g))
             return false;
         return succeed(p, vg.gradient, method);
@@ -149,7 +152,7 @@ class Projector {
         for (int step = 0; step <= settings_.max_newton_steps; ++step) {
             const ValueGradient vg = evaluate(p);
             if (step == 0 && !std::isfinite(start_value_)) start_value_ = vg.value;
-            const glm::dvec3 g = without_axis(vg.gradient, request_.fixed_axis);
+            const glm::dvec3 g = without_axes(vg.gradient, request_.fixed_axes);
             const double gg = glm::dot(g, g);
             if (!std::isfinite(vg.value) || !finite(vg.gradient) || !(gg > 0.0)) return false;
             if (std::abs(vg.value) <= tolerance_ * std::sqrt(gg))
@@ -166,7 +169,7 @@ class Projector {
     // Searches start + t * direction for the sign change nearest to t = 0, then refines it.
     bool bracketing() {
         const glm::dvec3 direction =
-            unit_or_zero(without_axis(request_.direction, request_.fixed_axis));
+            unit_or_zero(without_axes(request_.direction, request_.fixed_axes));
         if (direction == glm::dvec3(0.0)) return false;
         double f0 = start_value_;
         if (!std::isfinite(f0)) f0 = value(request_.start);

@@ -55,9 +55,10 @@ struct ProjectionRequest {
     double slope = 0.0;
     /// The local feature size (for a split: the length of the bisected edge). Must be > 0.
     double scale = 1.0;
-    /// An axis (0..2) whose coordinate must not change (a vertex on a face of the meshing box),
-    /// or -1.
-    int fixed_axis = -1;
+    /// The axes whose coordinates must not change (bit k for axis k): a vertex on a face of the
+    /// meshing box keeps that face's coordinate, one on an edge of the box both (it moves along
+    /// the box's edge), 0 for none.
+    std::uint8_t fixed_axes = 0;
 };
 
 /// Projects request.start onto f = 0, in up to three stages, each rejected when f is undefined or

@@ -23,7 +23,7 @@ ProjectionRequest Refiner::Impl::candidate_request(std::uint32_t t) const {
     request.direction = a.normal + b.normal;
     request.slope = 0.5 * (a.gradient_norm + b.gradient_norm);
     request.scale = glm::length(b.position - a.position);
-    request.fixed_axis = T.nb[T.base] == kNone ? face_axis(a.position, b.position, bounds_) : -1;
+    request.fixed_axes = T.nb[T.base] == kNone ? face_axes(a.position, b.position, bounds_) : 0;
     if (!(request.scale > 0.0)) request.scale = settings_.min_edge_length;
     return request;
 }
@@ -42,6 +42,7 @@ void Refiner::Impl::ensure_candidates(std::span<const std::uint32_t> tris) {
             T.candidate_gradient_norm = N.candidate_gradient_norm;
             T.candidate_on_surface = N.candidate_on_surface;
             T.candidate_refused = N.candidate_refused;
+            T.candidate_retried = N.candidate_retried;
             T.candidate_version = version_;
             continue;
         }
@@ -58,6 +59,7 @@ void Refiner::Impl::ensure_candidates(std::span<const std::uint32_t> tris) {
         T.candidate_gradient_norm = p.gradient_norm;
         T.candidate_on_surface = p.on_surface();
         T.candidate_refused = !p.on_surface() || !settings_.box.contains(p.position);
+        T.candidate_retried = false;
         T.candidate_version = version_;
     }
 }

@@ -4,6 +4,9 @@
 //   isomesh-protocol-sample frames DIR   writes a keyframe and deltas of a refining sphere as
 //                                        DIR/NNN.bin, and DIR/frames.json: what the C++ decoder
 //                                        reads from each frame, and the final mesh
+//   isomesh-protocol-sample frames-v2 DIR the same session in protocol version 2 (PROTOCOL.md
+//                                        4.5): a keyframe with octahedral normals, deltas
+//                                        encoded against what a version-2 client holds
 //   isomesh-protocol-sample messages DIR writes one sample of every control message as
 //                                        DIR/<type>.json
 //   isomesh-protocol-sample stats        prints bytes per triangle of deltas of several sizes
@@ -15,9 +18,12 @@
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <unordered_map>
 
 #include <nlohmann/json.hpp>
 
+#include "protocol/delta_v2.h"
+#include "protocol/delta_v2_geometry.h"
 #include "protocol/frame.h"
 #include "protocol/messages.h"
 #include "protocol/replica.h"
@@ -98,6 +104,107 @@ int write_frames(const fs::path& dir) {
     manifest["final_vertices"] = vertices_json(final_vertices);
     write_text(dir / "frames.json", manifest.dump());
     std::printf("wrote %zu frames to %s\n", session.frames.size(), dir.c_str());
+    return 0;
+}
+
+/// The version-2 delta that takes a version-2 client from `held` to where the version-1 delta
+/// `v1` takes a version-1 client: the same removals, the vertices it lacks as new ones (wire ids
+/// from next_vertex on, in version-1 id order), held ones on another grid point as moved.
+DeltaV2Change as_v2_change(const DecodedFrame& v1, const HeldMesh& held, const GridMath& math,
+                           std::unordered_map<std::uint32_t, std::uint32_t>& wire_vertex,
+                           const std::unordered_map<std::uint64_t, std::uint64_t>& wire_triangle,
+                           std::uint32_t next_vertex) {
+    DeltaV2Change change;
+    for (std::uint64_t id : v1.removed) change.removed.push_back(wire_triangle.at(id));
+    std::vector<Vertex> sorted = v1.vertices;
+    std::sort(sorted.begin(), sorted.end(),
+              [](const Vertex& a, const Vertex& b) { return a.id < b.id; });
+    for (const Vertex& v : sorted) {
+        auto it = wire_vertex.find(v.id);
+        const Vertex* known = it == wire_vertex.end() ? nullptr : held.vertex(it->second);
+        if (!known) {
+            const auto id = static_cast<std::uint32_t>(next_vertex + change.new_vertices.size());
+            wire_vertex[v.id] = id;
+            change.new_vertices.push_back({id, v.position, v.normal});
+        } else if (math.quantize(v.position) != math.recover(known->position)) {
+            change.moved_vertices.push_back({it->second, v.position, v.normal});
+        }
+    }
+    for (const FrameTriangle& t : v1.triangles) {
+        change.added.push_back({{wire_vertex.at(t.vertices[0]), wire_vertex.at(t.vertices[1]),
+                                 wire_vertex.at(t.vertices[2])}});
+    }
+    return change;
+}
+
+/// The sample session in version 2 (PROTOCOL.md 4.5): its keyframe with a grid block and
+/// octahedral normals, each delta encoded against what a version-2 client holds; frames.json says
+/// what the C++ decoder reads from each, and the final mesh.
+int write_frames_v2(const fs::path& dir) {
+    fs::create_directories(dir);
+    const samples::SampleSession session = samples::refining_sphere_session();
+    MeshEncoding encoding;
+    encoding.grid = QuantizationGrid::for_box({-1.5, 1.5, -1.5, 1.5, -1.5, 1.5});
+    encoding.octahedral_normals = true;
+    const GridMath math(encoding.grid);
+    HeldMesh held;
+    std::unordered_map<std::uint32_t, std::uint32_t> wire_vertex;    // version 1 -> version 2
+    std::unordered_map<std::uint64_t, std::uint64_t> wire_triangle;  // version 1 -> version 2
+    std::uint32_t next_vertex = 0;
+    std::uint64_t next_triangle = 0;
+    ordered_json manifest = {{"frames", ordered_json::array()}};
+    for (std::size_t i = 0; i < session.frames.size(); ++i) {
+        const DecodedFrame v1 = decode_frame(session.frames[i]).value();
+        FrameInfo info = v1.header;
+        info.protocol_version = 2;
+        std::vector<std::uint8_t> bytes;
+        if (info.kind == FrameKind::keyframe) {
+            std::vector<Triangle> triangles;
+            std::vector<std::uint64_t> ids;
+            for (const FrameTriangle& t : v1.triangles) {
+                triangles.push_back({t.vertices});
+                ids.push_back(t.id);
+                wire_triangle[t.id] = t.id;
+                next_triangle = std::max(next_triangle, t.id + 1);
+            }
+            for (const Vertex& v : v1.vertices) {
+                wire_vertex[v.id] = v.id;
+                next_vertex = std::max(next_vertex, v.id + 1);
+            }
+            bytes = encode_keyframe(info, v1.vertices, triangles, ids, encoding).value().bytes;
+        } else {
+            const DeltaV2Change change =
+                as_v2_change(v1, held, math, wire_vertex, wire_triangle, next_vertex);
+            auto encoded =
+                encode_delta_v2(info, held, change, next_triangle, next_vertex, encoding.grid);
+            if (!encoded) return std::fprintf(stderr, "%s\n", encoded.error().message.c_str()), 1;
+            bytes = encoded.value().bytes;
+            for (std::size_t t = 0; t < v1.triangles.size(); ++t)
+                wire_triangle[v1.triangles[t].id] = encoded.value().triangle_ids[t];
+            for (const auto& [was, now] : encoded.value().renamed) {
+                for (auto& [v1_id, wire] : wire_triangle) {
+                    if (wire == was) wire = now;
+                }
+            }
+            next_triangle = encoded.value().next_triangle_id;
+            next_vertex = encoded.value().next_vertex_id;
+        }
+        auto decoded = info.kind == FrameKind::keyframe
+                           ? decode_frame(bytes)
+                           : decode_delta_v2(bytes, held, encoding.grid);
+        if (!decoded) return std::fprintf(stderr, "v2 frame %zu does not decode\n", i), 1;
+        const std::string name = "frame" + std::to_string(i) + ".bin";
+        write_bytes(dir / name, bytes);
+        manifest["frames"].push_back(frame_json(name, decoded.value()));
+        held.apply(decoded.value());
+    }
+    std::vector<FrameTriangle> final_triangles;
+    for (const auto& [id, corners] : held.triangles()) final_triangles.push_back({id, corners});
+    std::sort(final_triangles.begin(), final_triangles.end(),
+              [](const FrameTriangle& a, const FrameTriangle& b) { return a.id < b.id; });
+    manifest["final_triangles"] = triangles_json(final_triangles);
+    write_text(dir / "frames.json", manifest.dump());
+    std::printf("wrote %zu version-2 frames to %s\n", session.frames.size(), dir.c_str());
     return 0;
 }
 
@@ -205,8 +312,10 @@ int echo_id(const std::string& id_json) {
 
 int main(int argc, char** argv) {
     const std::string usage =
-        "usage: isomesh-protocol-sample frames DIR | messages DIR | stats | echo-id JSON\n";
+        "usage: isomesh-protocol-sample frames DIR | frames-v2 DIR | messages DIR | stats | "
+        "echo-id JSON\n";
     if (argc == 3 && std::string(argv[1]) == "frames") return write_frames(argv[2]);
+    if (argc == 3 && std::string(argv[1]) == "frames-v2") return write_frames_v2(argv[2]);
     if (argc == 3 && std::string(argv[1]) == "messages") return write_messages(argv[2]);
     if (argc == 2 && std::string(argv[1]) == "stats") return print_stats();
     if (argc == 3 && std::string(argv[1]) == "echo-id") return echo_id(argv[2]);

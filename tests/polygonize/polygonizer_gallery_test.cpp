@@ -78,6 +78,11 @@ std::vector<GalleryCase> gallery() {
         {"tan_plane_off_lattice", "tan(x-0.1)=0", 1, 1, false, cube(-2.0, 2.0)},
         // A plane through lattice corners (zero corner values) and tilted.
         {"tilted_plane", "x+2y-0.5z=0.25", 1, 1, false},
+        // A tube (one-sheet hyperboloid) through lattice corners such as (1, -1.5, -1.5) next to
+        // the box's edges: the vertices of the edges at such a corner meet there, and the
+        // zero-length edges between them must collapse (an opposite vertex on the boundary
+        // keeping one triangle), or zero-area triangles stay.
+        {"hyperboloid_through_corners", "x^2+y^2-z^2=1", 1, 0, false, cube(-2.0, 2.0), 3, 9},
     };
 }
 

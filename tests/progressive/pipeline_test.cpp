@@ -4,9 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -173,6 +175,36 @@ TEST(Pipeline, step_makes_a_first_mesh_within_its_budget) {
         EXPECT_GT(first.triangles, 0u);
     }
     if (!test::shared_data_present()) GTEST_SKIP() << "bear and colonnade: " ISOMESH_NO_SHARED_DATA;
+}
+
+// Each keyframe (a step whose delta replaces the mesh) shows a phase-1 mesh the client has not
+// had: the gyroid's final phase-1 mesh is often its last intermediate one (the pending cells became
+// leaves unsplit), and it was sent again, resetting its refinement. (A keyframe's delta carries the
+// refinement of its step too, so the meshes are told apart by their phase-1 triangle and vertex
+// counts.)
+TEST(Pipeline, step_sends_no_keyframe_of_the_mesh_shown) {
+    auto counter = std::make_shared<test::EvaluationCounter>();
+    const auto field =
+        std::make_shared<test::CountingField>(test::field_of(kGyroid.expression), counter);
+    Pipeline pipeline(field, settings_for(kGyroid.box, 100000));
+    DeltaMesh client;
+    std::optional<PolygonizeStats> shown;
+    for (int step = 0; step < 100000; ++step) {
+        const PipelineStep s = pipeline.step(WorkBudget(300, counter->clock()));
+        ASSERT_EQ(client.apply(s.delta), "");
+        if (s.restarted) {
+            const PolygonizeStats& now = pipeline.phase1_stats();
+            if (shown) {
+                EXPECT_FALSE(now.triangles == shown->triangles && now.vertices == shown->vertices)
+                    << "step " << step << ": the phase-1 mesh of " << now.triangles
+                    << " triangles again";
+            }
+            shown = now;
+        }
+        if (s.converged) break;
+    }
+    EXPECT_GE(pipeline.status().phase1_meshes, 3u);
+    EXPECT_FALSE(pipeline.status().resolving);
 }
 
 // Regions where the equation holds are no surface: said within the first steps (at once where the

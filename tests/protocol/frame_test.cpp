@@ -112,7 +112,7 @@ TEST(FrameHeader, rejects_invalid_headers) {
     b[0] = 'X';
     EXPECT_TRUE(rejected(b));
     b = valid;
-    b[4] = 2;
+    b[4] = 3;
     EXPECT_TRUE(rejected(b, ErrorCode::unsupported_version));
     b = valid;
     b[5] = 3;
@@ -213,6 +213,28 @@ TEST(Frame, keyframe_with_ids_consecutive_in_decoded_order_needs_no_id_section) 
     ASSERT_TRUE(decoded);
     EXPECT_EQ(decoded.value().header.triangle_ids_bytes, 0u);
     EXPECT_EQ(decoded.value().header.base_triangle_id, 100u);
+}
+
+TEST(Frame, numbered_keyframe_gives_ids_in_decoded_order_and_has_no_id_section) {
+    const auto sphere = samples::icosphere(2);
+    FrameInfo info = delta_info(0);
+    info.kind = FrameKind::keyframe;
+    info.protocol_version = 2;
+    auto frame =
+        encode_keyframe_numbered(info, sphere.vertices, sphere.triangles, 500, unit_encoding());
+    ASSERT_TRUE(frame);
+    auto decoded = decode_frame(frame.value().bytes);
+    ASSERT_TRUE(decoded);
+    EXPECT_EQ(decoded.value().header.triangle_ids_bytes, 0u);
+    EXPECT_EQ(decoded.value().header.base_triangle_id, 500u);
+    // Each input triangle's id is where the decoder finds it (corners up to rotation).
+    const auto& ids = frame.value().triangle_ids;
+    ASSERT_EQ(ids.size(), sphere.triangles.size());
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+        const FrameTriangle& t = decoded.value().triangles.at(ids[i] - 500);
+        EXPECT_EQ(t.id, ids[i]);
+        EXPECT_EQ(canonical_rotation(t.vertices), canonical_rotation(sphere.triangles[i].vertices));
+    }
 }
 
 TEST(Frame, empty_keyframe_and_removal_only_delta) {

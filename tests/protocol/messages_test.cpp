@@ -152,7 +152,7 @@ TEST(Messages, malformed_json_is_bad_json) {
 
 TEST(Messages, version_and_type_errors) {
     expect_client_error(R"({"type":"ping"})", ErrorCode::bad_field, "missing field v");
-    expect_client_error(R"({"v":2,"type":"ping"})", ErrorCode::unsupported_version, "version 2");
+    expect_client_error(R"({"v":3,"type":"ping"})", ErrorCode::unsupported_version, "version 3");
     expect_client_error(R"({"v":"1","type":"ping"})", ErrorCode::bad_field, "field v");
     expect_client_error(R"({"v":1})", ErrorCode::bad_field, "missing field type");
     expect_client_error(R"({"v":1,"type":"explode"})", ErrorCode::unknown_type, "explode");

@@ -4,7 +4,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "protocol/delta_v2.h"
+#include "protocol/delta_v2_geometry.h"
 #include "protocol/frame.h"
+#include "protocol/tools/octahedron.h"
 
 namespace isomesh::protocol {
 namespace {
@@ -16,10 +19,11 @@ std::string read_document() {
     return text.str();
 }
 
-/// The hex bytes between the example-frame markers.
-std::vector<std::uint8_t> example_frame(const std::string& document) {
-    const auto begin = document.find("<!-- example-frame -->");
-    const auto end = document.find("<!-- /example-frame -->");
+/// The hex bytes between the markers <!-- NAME --> and <!-- /NAME -->.
+std::vector<std::uint8_t> example_frame(const std::string& document,
+                                        const std::string& name = "example-frame") {
+    const auto begin = document.find("<!-- " + name + " -->");
+    const auto end = document.find("<!-- /" + name + " -->");
     std::vector<std::uint8_t> bytes;
     if (begin == std::string::npos || end == std::string::npos) return bytes;
     std::istringstream block(document.substr(begin, end - begin));
@@ -46,6 +50,26 @@ TEST(ProtocolDocument, example_frame_decodes_as_described) {
     EXPECT_EQ(h.function_version, 2u);
     EXPECT_EQ(frame.value().removed, (std::vector<std::uint64_t>{1021, 1035, 100318}));
     EXPECT_TRUE(frame.value().triangles.empty());
+}
+
+TEST(ProtocolDocument, version_2_example_delta_decodes_as_described) {
+    const auto bytes = example_frame(read_document(), "example-frame-v2");
+    ASSERT_EQ(bytes.size(), 68u);
+    const HeldMesh octahedron = samples::octahedron();
+    auto frame = decode_delta_v2(bytes, octahedron, samples::octahedron_grid());
+    ASSERT_TRUE(frame) << frame.error().message;
+    EXPECT_EQ(frame.value().header.sequence, 1u);
+    EXPECT_EQ(frame.value().header.base_vertex_id, 6u);
+    EXPECT_EQ(frame.value().removed, (std::vector<std::uint64_t>{0, 4}));
+    const std::vector<FrameTriangle> added = {
+        {8, {0, 6, 4}}, {9, {6, 2, 4}}, {10, {2, 6, 5}}, {11, {6, 0, 5}}};
+    EXPECT_EQ(frame.value().triangles, added);
+    const GridMath grid(samples::octahedron_grid());
+    for (const Vertex& v : frame.value().vertices) {
+        if (v.id == 6) {
+            EXPECT_EQ(grid.recover(v.position), (GridPoint{13752, 13752, 8192}));
+        }
+    }
 }
 
 TEST(ProtocolDocument, header_size_matches) {

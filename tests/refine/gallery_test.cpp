@@ -48,6 +48,12 @@ std::vector<GalleryCase> gallery() {
         {"tan_plane_off_lattice", "tan(x-0.1)=0", false, small},
         {"tilted_plane", "x+2y-0.5z=0.25", false},
         {"gyroid", "sin(x)cos(y)+sin(y)cos(z)+sin(z)cos(x)=0", false},
+        // Two blobs of 32 phase-1 triangles each: the vertex normals at a base edge's ends differ
+        // by up to 130 degrees, and the midpoint projected along their mean folds the children;
+        // along the diamond's face normals it does not (every split was refused before).
+        {"two_small_blobs", "(x^2-0.8)^2+y^2+z^2=0.3", true, small},
+        // Through lattice corners next to the box's edges, its boundary on two faces there.
+        {"hyperboloid_through_corners", "x^2+y^2-z^2=1", false, small},
     };
 }
 

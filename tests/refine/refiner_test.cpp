@@ -217,7 +217,7 @@ TEST(Refiner, statistics_match_a_recount) {
         g.projected_midpoint =
             project_to_surface(
                 *e, {0.5 * (g.a + g.b), m.mesh.normals[tri[b]] + m.mesh.normals[tri[(b + 1) % 3]],
-                     0.0, glm::length(g.b - g.a), -1})
+                     0.0, glm::length(g.b - g.a), 0})
                 .position;
         const double err = measure.triangle_error(*e, g);
         total += err;

@@ -18,7 +18,7 @@ TEST(ProjectToSurface, secant_along_the_direction_lands_on_a_sphere) {
     auto e = field->make_evaluator();
     const glm::dvec3 start(1.5, 0.3, -0.2);
     for (double slope : {0.0, 3.0}) {  // unknown, or roughly |grad f|
-        const Projection p = project_to_surface(*e, {start, {1, 0.1, 0}, slope, 1.0, -1});
+        const Projection p = project_to_surface(*e, {start, {1, 0.1, 0}, slope, 1.0, 0});
         EXPECT_EQ(p.method, ProjectionMethod::Secant);
         EXPECT_NEAR(glm::length(p.position), 2.0, 1e-9);
         EXPECT_NEAR(glm::length(glm::cross(p.position - start, glm::dvec3(1, 0.1, 0))), 0.0, 1e-12);
@@ -31,7 +31,7 @@ TEST(ProjectToSurface, secant_along_the_direction_lands_on_a_sphere) {
 TEST(ProjectToSurface, newton_along_the_gradient_without_direction) {
     auto field = test::make_sphere_field({0, 0, 0}, 2.0);
     auto e = field->make_evaluator();
-    const Projection p = project_to_surface(*e, {{1.5, 0.3, -0.2}, {0, 0, 0}, 0.0, 1.0, -1});
+    const Projection p = project_to_surface(*e, {{1.5, 0.3, -0.2}, {0, 0, 0}, 0.0, 1.0, 0});
     EXPECT_EQ(p.method, ProjectionMethod::Newton);
     EXPECT_NEAR(glm::length(p.position), 2.0, 1e-9);
     EXPECT_NEAR(glm::dot(p.normal, glm::normalize(p.position)), 1.0, 1e-12);
@@ -40,10 +40,22 @@ TEST(ProjectToSurface, newton_along_the_gradient_without_direction) {
 TEST(ProjectToSurface, keeps_a_fixed_axis) {
     auto field = test::make_quadric_field({1, 1, 1}, 4.0);
     auto e = field->make_evaluator();
-    const Projection p = project_to_surface(*e, {{1.0, 1.0, 0.5}, {1, 1, 0}, 0.0, 1.0, 2});
+    const Projection p = project_to_surface(*e, {{1.0, 1.0, 0.5}, {1, 1, 0}, 0.0, 1.0, 0b100});
     ASSERT_TRUE(p.on_surface());
     EXPECT_EQ(p.position.z, 0.5);
     EXPECT_NEAR(glm::length(p.position), 2.0, 1e-9);
+}
+
+// A vertex on an edge of the meshing box (y and z fixed) moves along that edge only, even where
+// its direction and the gradient point across it.
+TEST(ProjectToSurface, keeps_two_fixed_axes) {
+    auto field = test::make_quadric_field({1, 1, 1}, 4.0);
+    auto e = field->make_evaluator();
+    const Projection p = project_to_surface(*e, {{0.5, 1.0, 1.0}, {1, 1, 1}, 0.0, 2.0, 0b110});
+    ASSERT_TRUE(p.on_surface());
+    EXPECT_EQ(p.position.y, 1.0);
+    EXPECT_EQ(p.position.z, 1.0);
+    EXPECT_NEAR(p.position.x, std::sqrt(2.0), 1e-9);
 }
 
 // f = x^3 - 0.001 has a zero gradient at the start: Newton cannot move, bracketing finds x = 0.1.
@@ -52,7 +64,7 @@ TEST(ProjectToSurface, brackets_where_newton_fails) {
         {[](const glm::dvec3& p) { return p.x * p.x * p.x - 0.001; },
          [](const glm::dvec3& p) { return glm::dvec3(3 * p.x * p.x, 0, 0); }});
     auto e = field->make_evaluator();
-    const Projection p = project_to_surface(*e, {{0, 0, 0}, {1, 0, 0}, 0.0, 1.0, -1});
+    const Projection p = project_to_surface(*e, {{0, 0, 0}, {1, 0, 0}, 0.0, 1.0, 0});
     EXPECT_EQ(p.method, ProjectionMethod::Bracketing);
     EXPECT_NEAR(p.position.x, 0.1, 1e-9);
 }
@@ -64,7 +76,7 @@ TEST(ProjectToSurface, never_moves_to_a_pole) {
          [](const glm::dvec3& p) { return glm::dvec3(-1.0 / (p.x * p.x), 0, 0); }});
     auto e = field->make_evaluator();
     const glm::dvec3 start(0.01, 0.2, 0.3);
-    const Projection p = project_to_surface(*e, {start, {1, 0, 0}, 0.0, 1.0, -1});
+    const Projection p = project_to_surface(*e, {start, {1, 0, 0}, 0.0, 1.0, 0});
     EXPECT_EQ(p.method, ProjectionMethod::Failed);
     EXPECT_EQ(p.position, start);
 }
@@ -72,15 +84,15 @@ TEST(ProjectToSurface, never_moves_to_a_pole) {
 TEST(ProjectToSurface, fails_without_surface_within_reach) {
     auto field = test::make_sphere_field({0, 0, 0}, 10.0);
     auto e = field->make_evaluator();
-    const Projection p = project_to_surface(*e, {{1, 0, 0}, {1, 0, 0}, 0.0, 1.0, -1});
+    const Projection p = project_to_surface(*e, {{1, 0, 0}, {1, 0, 0}, 0.0, 1.0, 0});
     EXPECT_FALSE(p.on_surface());
     EXPECT_EQ(p.position, glm::dvec3(1, 0, 0));
     // Undefined everywhere: NaN values never count as roots.
     auto nan_field = test::make_analytic_field({[](const glm::dvec3&) { return std::nan(""); },
                                                 [](const glm::dvec3&) { return glm::dvec3(0.0); }});
     auto n = nan_field->make_evaluator();
-    EXPECT_FALSE(project_to_surface(*n, {{1, 0, 0}, {1, 0, 0}, 0.0, 1.0, -1}).on_surface());
-    EXPECT_FALSE(project_to_surface(*e, {{1, 0, 0}, {1, 0, 0}, 0.0, 0.0, -1}).on_surface());
+    EXPECT_FALSE(project_to_surface(*n, {{1, 0, 0}, {1, 0, 0}, 0.0, 1.0, 0}).on_surface());
+    EXPECT_FALSE(project_to_surface(*e, {{1, 0, 0}, {1, 0, 0}, 0.0, 0.0, 0}).on_surface());
 }
 
 }  // namespace
@@ -97,8 +109,8 @@ TEST(ProjectToSurface, batch_matches_one_at_a_time) {
     for (int i = 0; i < 300; ++i) {
         const glm::dvec3 start(std::sin(i) * 2.0, std::cos(0.7 * i) * 2.0, std::sin(1.3 * i));
         const glm::dvec3 direction = i % 5 == 0 ? glm::dvec3(0.0) : start;
-        requests.push_back(
-            {start, direction, i % 3 == 0 ? 0.0 : 3.0, 0.2 + (i % 7) * 0.1, i % 11 == 0 ? 2 : -1});
+        requests.push_back({start, direction, i % 3 == 0 ? 0.0 : 3.0, 0.2 + (i % 7) * 0.1,
+                            std::uint8_t(i % 11 == 0 ? 0b100 : 0)});
     }
     std::vector<Projection> batch(requests.size());
     project_to_surface(*e, requests, batch);

@@ -25,7 +25,7 @@ void TestConnection::send(std::string_view text) {
 }
 
 void TestConnection::send(const protocol::ClientMessage& message) {
-    send(protocol::serialize(message));
+    send(protocol::serialize(message, version));
 }
 
 void TestConnection::pump() {
@@ -69,11 +69,13 @@ void TestConnection::receive(const Outgoing& message) {
         received.emplace_back(parsed.value());
         return;
     }
-    auto decoded = protocol::decode_frame(*message.frame);
-    ASSERT_TRUE(decoded.ok()) << decoded.error().message;
-    frames.push_back(decoded.value().header);
-    received.emplace_back(decoded.value().header);
-    outcomes.push_back(replicas[decoded.value().header.session].apply(decoded.value()));
+    auto header = protocol::read_frame_header(*message.frame);
+    ASSERT_TRUE(header.ok()) << header.error().message;
+    frames.push_back(header.value());
+    received.emplace_back(header.value());
+    auto outcome = replicas[header.value().session].receive(*message.frame);
+    ASSERT_TRUE(outcome.ok()) << outcome.error().message;
+    outcomes.push_back(outcome.value());
 }
 
 std::vector<std::array<std::uint32_t, 3>> canonical_triangles(const protocol::MeshReplica& mesh) {

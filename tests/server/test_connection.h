@@ -55,6 +55,8 @@ class TestConnection {
                                          std::uint32_t version) const;
 
     std::shared_ptr<Client> client;
+    /// The protocol version of the messages send() writes (PROTOCOL.md 9).
+    int version = protocol::kProtocolVersion;
     bool reading = true;
     std::vector<protocol::ServerMessage> messages;
     /// Everything received, messages and frame headers, in the order it arrived.

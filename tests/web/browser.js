@@ -21,7 +21,7 @@ export const WAIT_MS = 60000;
  * Starts a server and a browser context. Resolves with {server, context, page, pageErrors,
  * offHostRequests, close()}; `close` stops both and saves the server's log as `${name}-server.log`.
  */
-export async function openViewer(name, { viewport = { width: 1280, height: 800 }, serverArgs = [] } = {}) {
+export async function openViewer(name, { viewport = { width: 1280, height: 800 }, serverArgs = [], relay = false } = {}) {
   mkdirSync(ARTIFACTS, { recursive: true });
   const server = await startServer(serverArgs);
   const profile = mkdtempSync(join(tmpdir(), 'isomesh-chromium-'));
@@ -41,6 +41,7 @@ export async function openViewer(name, { viewport = { width: 1280, height: 800 }
     viewport,
     acceptDownloads: true,
   });
+  const messages = relay ? await relayWebSockets(context) : null;
   const pageErrors = [];
   const offHostRequests = [];
   await context.route('**/*', (route) => {
@@ -65,7 +66,43 @@ export async function openViewer(name, { viewport = { width: 1280, height: 800 }
     writeFileSync(join(ARTIFACTS, `${name}-server.log`), server.log.join('\n') + '\n');
     return { code, signal };
   };
-  return { server, context, page, pageErrors, offHostRequests, close };
+  return { server, context, page, pageErrors, offHostRequests, messages, close };
+}
+
+/**
+ * Passes every WebSocket of `context` through the test, as a slow network would deliver it.
+ * Resolves with {holdAfter(predicate), release()}: after a server message (parsed JSON text, or
+ * null for a binary frame) for which `predicate` holds, that message reaches the page and the
+ * server's later ones wait until `release()`. A test thus sees the page in a state the server
+ * passes through, however fast the server and however slow the browser.
+ */
+async function relayWebSockets(context) {
+  let hold = null;
+  let held = null; // [[page side, message]] once holding
+  const control = {
+    holdAfter(predicate) {
+      hold = predicate;
+    },
+    release() {
+      const queued = held ?? [];
+      hold = null;
+      held = null;
+      for (const [page, message] of queued) page.send(message);
+    },
+  };
+  await context.routeWebSocket(/\/ws/, (page) => {
+    const server = page.connectToServer();
+    page.onMessage((message) => server.send(message));
+    server.onMessage((message) => {
+      if (held) {
+        held.push([page, message]);
+        return;
+      }
+      page.send(message);
+      if (hold?.(typeof message === 'string' ? JSON.parse(message) : null)) held = [];
+    });
+  });
+  return control;
 }
 
 /**

@@ -17,7 +17,7 @@ import { ARTIFACTS, WAIT_MS, boxCornersOnScreen, canvasShot, convergedOn, snapsh
 import { coloredFraction, differingFraction } from './pixels.js';
 
 let page;
-const viewer = viewerForTests('viewer', {}, (v) => (page = v.page));
+const viewer = viewerForTests('viewer', { relay: true }, (v) => (page = v.page));
 
 const slider = (name) => page.getByRole('slider', { name, exact: true });
 const button = (name) => page.getByRole('button', { name, exact: true });
@@ -462,7 +462,9 @@ test("what the server found: no surface in the box, a region that is not a surfa
 test('a budget below what the shape needs: "finding the shape…" while the server resolves it, then the count it needs, held and shown', async () => {
   // The gyroid on ±7 needs about 300 triangles for its topology. A new session (a new row) shows
   // its first mesh at once while the server resolves the topology, for about a second, saying so
-  // in `progress` (an update finds the new shape aside and sends it whole).
+  // in `progress` (an update finds the new shape aside and sends it whole). The server's messages
+  // after its first `progress` that says so wait until the row has been seen saying so: a busy
+  // browser may otherwise apply the first mesh only once the topology is resolved.
   const direction = () => page.evaluate(() => {
     const { position, target } = window.isomesh.viewer.getCamera();
     const d = position.map((p, i) => p - target[i]);
@@ -482,7 +484,13 @@ test('a budget below what the shape needs: "finding the shape…" while the serv
     new MutationObserver(() => window.progressTexts.push(text.textContent)).observe(text, { childList: true, characterData: true, subtree: true });
   });
   const gyroid = 'sin(x)cos(y)+sin(y)cos(z)+sin(z)cos(x)=0';
+  viewer.messages.holdAfter((m) => m?.type === 'progress' && m.resolving);
   await typeEquation(page, gyroid, 1);
+  try {
+    await page.waitForFunction(() => /^finding the shape… · \d+ triangles$/.test(document.querySelectorAll('.object .progress')[1]?.textContent ?? ''), null, { timeout: 60000, polling: 50 });
+  } finally {
+    viewer.messages.release();
+  }
   const s = await waitForSnapshot(page, `(s, arg) => s.status === 'converged' && s.surfaces[1]?.expression === arg && s.surfaces[1].outcome?.budgetUnreachable`, gyroid);
   const held = await assertCountIsTheTruth();
   const f = s.surfaces[1];

@@ -30,6 +30,8 @@ import {
   REPLY_TYPES,
   errorFromReply,
   functionFields,
+  PROTOCOL_VERSION,
+  PROTOCOL_VERSIONS,
   parseServerMessage,
   requestText,
   sessionState,
@@ -87,6 +89,8 @@ function routedUrl(url, route) {
  * @param {boolean} [options.reconnect] reconnect and resubscribe when the connection drops (true)
  * @param {number[]} [options.reconnectDelaysMs] delays between attempts (RECONNECT_DELAYS_MS)
  * @param {number} [options.maxReconnectAttempts] attempts in a row before giving up (Infinity)
+ * @param {number} [options.protocolVersion] 2 (default: deltas carry only what the client lacks,
+ *   PROTOCOL.md 4.5) or 1
  * @returns {Promise<IsomeshClient>}
  */
 export function connect(url, options = {}) {
@@ -99,6 +103,9 @@ export function connect(url, options = {}) {
   }
   if (options.route != null && !/^[0-9a-fA-F]{8}$/.test(options.route)) {
     return Promise.reject(new TypeError('options.route must be 8 hex digits'));
+  }
+  if (options.protocolVersion !== undefined && !PROTOCOL_VERSIONS.includes(options.protocolVersion)) {
+    return Promise.reject(new TypeError(`options.protocolVersion must be one of ${PROTOCOL_VERSIONS.join(', ')}`));
   }
   const client = new IsomeshClient(url, { ...options, WebSocket: WebSocketImpl });
   return client.opened.then(() => client);
@@ -116,6 +123,7 @@ export class IsomeshClient extends Emitter {
       reconnect: true,
       reconnectDelaysMs: RECONNECT_DELAYS_MS,
       maxReconnectAttempts: Infinity,
+      protocolVersion: PROTOCOL_VERSION,
       ...options,
     };
     /** The connection's route (8 hex digits), or null. */
@@ -183,7 +191,7 @@ export class IsomeshClient extends Emitter {
   request(type, fields = {}, onReply = (reply) => reply) {
     if (this.closed) return Promise.reject(new IsomeshError('closed', 'the connection is closed'));
     const id = this.nextRequestId++;
-    const text = requestText(type, id, fields);
+    const text = requestText(type, id, fields, this.options.protocolVersion);
     return new Promise((resolve, reject) => {
       const timer = setTimeout(() => {
         this.pending.delete(id);
@@ -197,7 +205,7 @@ export class IsomeshClient extends Emitter {
 
   /** Sends a message that expects no reply (e.g. resync); dropped while disconnected. */
   send(type, fields = {}) {
-    if (this.connected) this.currentSocket.send(requestText(type, undefined, fields));
+    if (this.connected) this.currentSocket.send(requestText(type, undefined, fields, this.options.protocolVersion));
   }
 
   /**
@@ -294,6 +302,10 @@ export class IsomeshClient extends Emitter {
         entry.reject(new IsomeshError('closed', `connection lost before the reply to ${entry.type}`));
       }
     }
+    // Frames of the lost connection not applied yet are dropped: every session subscribes again
+    // and its keyframe comes first.
+    this.frameQueue = [];
+    this.frameQueueHead = 0;
     for (const session of this.sessions.values()) session._connectionLost();
     this.emit('disconnected', { code: event.code, reason: event.reason });
     this.#scheduleReconnect();
@@ -613,6 +625,10 @@ export class Session extends Emitter {
 
   /** The connection dropped: the mesh stays on hand, not known to be final until resubscribed. */
   _connectionLost() {
+    // The next frame to apply is the keyframe of the new subscription: a session rebuilt after a
+    // restart numbers its frames from 0 again (PROTOCOL.md 3.6), so its `converged` must not be
+    // measured against the sequence of the mesh on hand (which stays shown meanwhile).
+    this.mesh.synchronized = false;
     this.lastConverged = null;
     this.lastProgress = null;
     this.resyncPending = false;

@@ -32,7 +32,7 @@ export class DracoMeshDecoder {
    *   point for positions and normals) and 3 point indices per triangle, in decoded order.
    * Throws IsomeshError('bad_frame') on anything that is not such a mesh.
    */
-  decode(bytes) {
+  decode(bytes, octahedral = null) {
     const { draco, decoder } = this;
     if (decoder.GetEncodedGeometryType(bytes) !== draco.TRIANGULAR_MESH) {
       throw frameError('mesh payload is not a Draco triangle mesh');
@@ -43,9 +43,10 @@ export class DracoMeshDecoder {
       if (!status.ok() || mesh.ptr === 0) throw frameError(`Draco: ${status.error_msg()}`);
       const pointCount = mesh.num_points();
       const position = this.#byUniqueId(mesh, POSITION_UNIQUE_ID, draco.POSITION, 'position');
-      const normal = this.#byUniqueId(mesh, NORMAL_UNIQUE_ID, draco.NORMAL, 'normal');
       const positions = this.#floatAttribute(mesh, position);
-      const normals = this.#floatAttribute(mesh, normal);
+      const normals = octahedral
+        ? this.#octahedralNormals(mesh, octahedral)
+        : this.#floatAttribute(mesh, this.#byUniqueId(mesh, NORMAL_UNIQUE_ID, draco.NORMAL, 'normal'));
       const globalIds = this.#globalIds(mesh);
       const faces = this.#faces(mesh);
       return { pointCount, globalIds, positions, normals, faces };
@@ -81,6 +82,29 @@ export class DracoMeshDecoder {
     );
   }
 
+  /**
+   * Version-2 payloads (PROTOCOL.md 4.5): the normal attribute is GENERIC int16 x 2, metadata
+   * name = "octahedral_normal", holding octahedral codes that `octahedral` (a GridMath) decodes.
+   */
+  #octahedralNormals(mesh, octahedral) {
+    const { draco, decoder } = this;
+    const id = decoder.GetAttributeIdByMetadataEntry(mesh, 'name', 'octahedral_normal');
+    const attribute = id >= 0 ? decoder.GetAttribute(mesh, id) : null;
+    if (!attribute || attribute.num_components() !== 2 || attribute.data_type() !== draco.DT_INT16) {
+      throw frameError('version-2 payload lacks an int16 x 2 octahedral_normal attribute');
+    }
+    const codes = this.#copyOut(mesh.num_points() * 2, Int16Array, (bytes, ptr) =>
+      decoder.GetAttributeDataArrayForAllPoints(mesh, attribute, draco.DT_INT16, bytes, ptr),
+    );
+    const normals = new Float32Array(mesh.num_points() * 3);
+    for (let p = 0; p < mesh.num_points(); ++p) {
+      const code = [codes[2 * p], codes[2 * p + 1]];
+      if (!octahedral.validNormal(code)) throw frameError('octahedral normal out of range');
+      normals.set(octahedral.decodeNormal(code), 3 * p);
+    }
+    return normals;
+  }
+
   #globalIds(mesh) {
     const { draco, decoder } = this;
     const id = decoder.GetAttributeIdByMetadataEntry(mesh, 'name', 'global_id');
@@ -107,7 +131,7 @@ export class DracoMeshDecoder {
     try {
       if (!fill(byteLength, ptr)) throw frameError('mesh payload attribute data is truncated');
       // Read the heap view only now: decoding may have grown the WebAssembly memory.
-      const heap = ArrayType === Float32Array ? draco.HEAPF32 : draco.HEAPU32;
+      const heap = { Float32Array: draco.HEAPF32, Int16Array: draco.HEAP16 }[ArrayType.name] ?? draco.HEAPU32;
       return new ArrayType(heap.buffer, ptr, count).slice();
     } finally {
       draco._free(ptr);

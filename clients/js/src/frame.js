@@ -1,4 +1,6 @@
-// Binary frames: the mesh data of the isomesh protocol (PROTOCOL.md, "Binary frames").
+// Binary frames: the mesh data of the isomesh protocol (PROTOCOL.md, "Binary frames"), versions 1
+// and 2. A version-2 keyframe has a 20-byte grid block after the header and octahedral normals in
+// its payload; a version-2 delta (delta_v2.js) is decoded later, against the held mesh.
 //
 // A frame is a fixed 76-byte little-endian header, then three sections whose lengths the header
 // gives: removed triangle ids (sorted, delta-coded varints), explicit triangle ids (optional,
@@ -23,10 +25,14 @@
 //       72    4 mesh payload length in bytes
 
 import { IsomeshError } from './errors.js';
-import { PROTOCOL_VERSION } from './messages.js';
+import { DELTA_V2_HEADER_BYTES, readDeltaV2Header } from './delta_v2.js';
+import { GridMath } from './delta_v2_geometry.js';
+import { PROTOCOL_VERSIONS } from './messages.js';
 import { MAX_TRIANGLE_ID, decodeIdSequence, decodeSortedIds } from './varint.js';
 
 export const FRAME_HEADER_BYTES = 76;
+/** Version-2 keyframes: the grid block after the header. */
+export const GRID_BLOCK_BYTES = 20;
 /** Most triangles, added or removed, in one frame. */
 export const MAX_FRAME_TRIANGLES = 2 ** 22;
 export const FRAME_FLAG_CONVERGED = 1;
@@ -41,24 +47,21 @@ const KINDS = { 1: 'keyframe', 2: 'delta' };
  * against the frame by decodeFrame.
  */
 export function readFrameHeader(bytes) {
-  if (bytes.length < FRAME_HEADER_BYTES) throw frameError('frame shorter than its 76-byte header');
+  if (bytes.length < DELTA_V2_HEADER_BYTES) throw frameError('frame shorter than its header');
   if (!MAGIC.every((b, i) => bytes[i] === b)) throw frameError('frame does not start with ISOM');
-  if (bytes[4] !== PROTOCOL_VERSION) {
-    throw new IsomeshError('unsupported_version', `frame of protocol version ${bytes[4]}`);
+  const version = bytes[4];
+  if (!PROTOCOL_VERSIONS.includes(version)) {
+    throw new IsomeshError('unsupported_version', `frame of protocol version ${version}`);
   }
   const kind = KINDS[bytes[5]];
   if (!kind) throw frameError(`unknown frame kind ${bytes[5]}`);
+  const common = readCommonHeader(bytes, version, kind);
+  if (version === 2 && kind === 'delta') return readDeltaV2Header(bytes, common);
+  if (bytes.length < FRAME_HEADER_BYTES) throw frameError('frame shorter than its 76-byte header');
   const view = new DataView(bytes.buffer, bytes.byteOffset, FRAME_HEADER_BYTES);
   const u32 = (offset) => view.getUint32(offset, true);
-  const flags = view.getUint16(6, true);
   const h = {
-    kind,
-    flags,
-    converged: (flags & FRAME_FLAG_CONVERGED) !== 0,
-    catchUp: (flags & FRAME_FLAG_CATCH_UP) !== 0,
-    session: toHex(bytes.subarray(8, 24)),
-    sequence: safeU64(view, 24, 'sequence number'),
-    timestampUs: safeU64(view, 32, 'timestamp'),
+    ...common,
     baseTriangleId: safeU64(view, 40, 'base triangle id'),
     functionVersion: u32(48),
     removedCount: u32(52),
@@ -69,7 +72,44 @@ export function readFrameHeader(bytes) {
     meshBytes: u32(72),
   };
   checkHeader(h);
+  if (version === 2) h.grid = readGridBlock(bytes);
   return h;
+}
+
+/** Magic to timestamp: the fields every frame of both versions shares. */
+function readCommonHeader(bytes, version, kind) {
+  const view = new DataView(bytes.buffer, bytes.byteOffset, 40);
+  const flags = view.getUint16(6, true);
+  return {
+    version,
+    kind,
+    flags,
+    converged: (flags & FRAME_FLAG_CONVERGED) !== 0,
+    catchUp: (flags & FRAME_FLAG_CATCH_UP) !== 0,
+    session: toHex(bytes.subarray(8, 24)),
+    sequence: safeU64(view, 24, 'sequence number'),
+    timestampUs: safeU64(view, 32, 'timestamp'),
+  };
+}
+
+/** The grid block of a version-2 keyframe (PROTOCOL.md 4.5), after the 76-byte header. */
+function readGridBlock(bytes) {
+  if (bytes.length < FRAME_HEADER_BYTES + GRID_BLOCK_BYTES) {
+    throw frameError('version-2 keyframe shorter than its header and grid block');
+  }
+  const view = new DataView(bytes.buffer, bytes.byteOffset + FRAME_HEADER_BYTES, GRID_BLOCK_BYTES);
+  const grid = {
+    origin: [0, 4, 8].map((o) => view.getFloat32(o, true)),
+    range: view.getFloat32(12, true),
+    positionBits: view.getUint8(16),
+    normalBits: view.getUint8(17),
+  };
+  const finite = [...grid.origin, grid.range].every(Number.isFinite);
+  if (!finite || !(grid.range > 0) || grid.positionBits < 1 || grid.positionBits > 30 ||
+      grid.normalBits < 2 || grid.normalBits > 30) {
+    throw frameError('invalid quantization grid');
+  }
+  return grid;
 }
 
 function checkHeader(h) {
@@ -95,15 +135,21 @@ function checkHeader(h) {
  * @param {{decode(bytes: Uint8Array): object}} meshDecoder a DracoMeshDecoder
  * @returns {{header: object, removed: number[], triangleIds: number[], mesh: object|null}}
  *   `removed` ascending; `triangleIds[i]` is the id of payload triangle i; `mesh` is what
- *   DracoMeshDecoder.decode returns (null when the frame adds nothing).
+ *   DracoMeshDecoder.decode returns (null when the frame adds nothing). A version-2 delta comes
+ *   back undecoded: {header, body} (SessionMesh.apply decodes it against the mesh it holds).
  */
 export function decodeFrame(bytes, meshDecoder) {
   const header = readFrameHeader(bytes);
-  const expected = FRAME_HEADER_BYTES + header.removedBytes + header.triangleIdsBytes + header.meshBytes;
+  if (header.version === 2 && header.kind === 'delta') {
+    // Decoded against the held mesh, and only when it is the next frame (SessionMesh.apply).
+    return { header, body: bytes.subarray(DELTA_V2_HEADER_BYTES), removed: null, triangleIds: null, mesh: null };
+  }
+  const start = FRAME_HEADER_BYTES + (header.version === 2 ? GRID_BLOCK_BYTES : 0);
+  const expected = start + header.removedBytes + header.triangleIdsBytes + header.meshBytes;
   if (expected !== bytes.length) {
     throw frameError(`frame of ${bytes.length} bytes, header says ${expected}`);
   }
-  let offset = FRAME_HEADER_BYTES;
+  let offset = start;
   const section = (length) => bytes.subarray(offset, (offset += length));
   const removedSection = section(header.removedBytes);
   const idsSection = section(header.triangleIdsBytes);
@@ -113,7 +159,7 @@ export function decodeFrame(bytes, meshDecoder) {
   const triangleIds = decodeTriangleIds(header, idsSection);
   if (header.triangleCount === 0) return { header, removed, triangleIds, mesh: null };
 
-  const mesh = meshDecoder.decode(meshSection);
+  const mesh = meshDecoder.decode(meshSection, header.grid ? new GridMath(header.grid) : null);
   if (mesh.faces.length !== 3 * header.triangleCount || mesh.pointCount !== header.pointCount) {
     throw frameError('mesh payload counts disagree with the header');
   }

@@ -9,9 +9,14 @@
 // - A gap (a delta after a missing one) or an inconsistent delta stops the mesh until the next
 //   keyframe, which the client asks for with `resync`.
 //
+// Version-2 deltas (PROTOCOL.md 4.5) are decoded here, when they are the next frame, against the
+// mesh held as deltas name it (HeldMesh); a delta that does not fit it is inconsistent.
+//
 // Vertices (VertexTable) are reference-counted by the triangles that use them and dropped when
 // unused: every payload carries all the vertices its triangles use.
 
+import { decodeDeltaV2 } from './delta_v2.js';
+import { HeldMesh } from './held_mesh.js';
 import { TriangleSlots } from './slots.js';
 
 export const Outcome = Object.freeze({
@@ -135,6 +140,9 @@ export class SessionMesh {
     this.synchronized = false;
     this.sequence = -1;
     this.functionVersion = 0;
+    // Version 2 (PROTOCOL.md 4.5): the mesh as deltas name it, and the last keyframe's grid.
+    this.held = null;
+    this.grid = null;
   }
 
   get triangleCount() {
@@ -151,6 +159,7 @@ export class SessionMesh {
       this.#reset();
       this.#add(frame);
       this.slots.compact();
+      this.#hold(frame);
       this.#accept(h);
       return Outcome.applied;
     }
@@ -160,7 +169,7 @@ export class SessionMesh {
       this.synchronized = false;
       return Outcome.gap;
     }
-    if (!this.#consistent(frame)) {
+    if (!this.#decodeV2(frame) || !this.#consistent(frame)) {
       this.synchronized = false;
       return Outcome.inconsistent;
     }
@@ -168,8 +177,38 @@ export class SessionMesh {
     const changed = this.#add(frame);
     this.slots.compact();
     if (changed.size > 0) this.#rewriteVertices(changed);
+    this.held?.apply(frame);
     this.#accept(h);
     return Outcome.applied;
+  }
+
+  /** Keeps what version-2 deltas are decoded against (nothing for version 1). */
+  #hold(keyframe) {
+    if (keyframe.header.version !== 2) {
+      this.held = this.grid = null;
+      return;
+    }
+    this.held ??= new HeldMesh();
+    this.held.apply(keyframe);
+    this.grid = keyframe.header.grid;
+  }
+
+  /**
+   * A version-2 delta (decodeFrame left it undecoded) decoded against the held mesh, in place:
+   * the frame gets removed, triangleIds and mesh as a version-1 delta has them. False when it does
+   * not fit (a resync follows).
+   */
+  #decodeV2(frame) {
+    if (frame.header.version !== 2 || frame.removed !== null) return true;
+    if (!this.held) return false;
+    try {
+      Object.assign(frame, decodeDeltaV2(frame.header, frame.body, this.held, this.grid));
+    } catch (error) {
+      if (error?.code !== 'bad_frame') throw error;
+      frame.error = error;
+      return false;
+    }
+    return true;
   }
 
   /** The triangles sorted by id, as {id, vertices: [a, b, c]} (for comparing meshes). */

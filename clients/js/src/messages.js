@@ -4,8 +4,14 @@
 
 import { ERROR_CODES, IsomeshError } from './errors.js';
 
-/** The protocol version this library speaks: "v" of every message, byte 4 of every frame. */
-export const PROTOCOL_VERSION = 1;
+/**
+ * The protocol version this library asks for by default: "v" of every message, byte 4 of every
+ * frame. Version 2 differs from 1 only in its binary frames (PROTOCOL.md 4.5); a connection
+ * speaks the version of its first message (options.protocolVersion of connect()).
+ */
+export const PROTOCOL_VERSION = 2;
+/** The versions this library speaks. */
+export const PROTOCOL_VERSIONS = Object.freeze([1, 2]);
 
 /** Server-to-client messages that answer a request and echo its "id". */
 export const REPLY_TYPES = new Set(['created', 'updated', 'subscribed', 'ack', 'pong', 'error']);
@@ -14,8 +20,8 @@ export const REPLY_TYPES = new Set(['created', 'updated', 'subscribed', 'ack', '
  * The JSON text of a request. `fields` are the message's own fields; undefined ones are left out.
  * @param {string} type 'create', 'update', 'subscribe', ...
  */
-export function requestText(type, id, fields = {}) {
-  const message = { v: PROTOCOL_VERSION, type };
+export function requestText(type, id, fields = {}, version = PROTOCOL_VERSION) {
+  const message = { v: version, type };
   if (id !== undefined) message.id = id;
   for (const [key, value] of Object.entries(fields)) {
     if (value !== undefined) message[key] = value;
@@ -69,7 +75,9 @@ export function parseServerMessage(text) {
   if (message === null || typeof message !== 'object' || Array.isArray(message)) {
     throw new IsomeshError('bad_json', 'server message is not a JSON object');
   }
-  if (message.v !== PROTOCOL_VERSION) {
+  // A server writes its connection's version, and "v": 1 until the connection's first message
+  // parsed (PROTOCOL.md 9).
+  if (!PROTOCOL_VERSIONS.includes(message.v)) {
     throw new IsomeshError('unsupported_version', `server message of protocol version ${message.v}`);
   }
   if (typeof message.type !== 'string') throw new IsomeshError('bad_field', 'server message without a type');

@@ -53,8 +53,8 @@ async function until(predicate) {
 const state = { version: 1, expression: 'x^2+y^2+z^2=a', parameters: { a: 1 }, box: [-2, 2, -2, 2, -2, 2], constraints: { triangles: 100, max_error: 0, error_measure: 'epsilon4' } };
 const square = { vertices: [1, 2, 3, 4].map((id) => vertex(id)), triangles: [[1, 2, 3], [1, 3, 4]] };
 
-async function connected() {
-  const client = await connect('ws://127.0.0.1:1/ws', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder() });
+async function connected(options = {}) {
+  const client = await connect('ws://127.0.0.1:1/ws', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder(), ...options });
   return { client, socket: FakeSocket.last };
 }
 
@@ -70,11 +70,18 @@ test('connect needs a WebSocket and a decoder', async () => {
   await assert.rejects(connect('ws://x', { WebSocket: null, decoder: new FakeMeshDecoder() }), /WebSocket/);
 });
 
+test('connect speaks protocol version 1 when asked (options.protocolVersion), and only 1 or 2', async () => {
+  const { client, socket } = await connected({ protocolVersion: 1 });
+  await created(client, socket);
+  assert.equal(socket.sent[0].v, 1);
+  await assert.rejects(connected({ protocolVersion: 3 }), /protocolVersion/);
+});
+
 test('create sends a versioned request and resolves with the session on its reply', async () => {
   const { client, socket } = await connected();
   assert.equal(socket.binaryType, 'arraybuffer');
   const session = await created(client, socket);
-  assert.deepEqual(socket.sent[0], { v: 1, type: 'create', id: 1, expression: 'x^2+y^2+z^2=a', parameters: { a: 1 }, box: state.box });
+  assert.deepEqual(socket.sent[0], { v: 2, type: 'create', id: 1, expression: 'x^2+y^2+z^2=a', parameters: { a: 1 }, box: state.box });
   assert.equal(session.id, SESSION);
   assert.deepEqual(session.state.parameters, { a: 1 });
   assert.equal(client.sessions.get(SESSION), session);
@@ -121,7 +128,7 @@ test('update merges into the state the reply reports', async () => {
   const { client, socket } = await connected();
   const session = await created(client, socket);
   const pending = session.update({ parameters: { a: 2 } });
-  assert.deepEqual(socket.lastSent(), { v: 1, type: 'update', id: 2, session: SESSION, parameters: { a: 2 } });
+  assert.deepEqual(socket.lastSent(), { v: 2, type: 'update', id: 2, session: SESSION, parameters: { a: 2 } });
   socket.reply({ type: 'updated', id: 2, session: SESSION, ...state, version: 2, parameters: { a: 2 } });
   assert.deepEqual((await pending).parameters, { a: 2 });
   assert.equal(session.state.version, 2);
@@ -166,7 +173,7 @@ test('errors that answer no request go to the session or the client', async () =
   client.on('error', (e) => seen.push(['client', e.code]));
   socket.reply({ type: 'error', session: SESSION, code: 'eval_timeout', message: 'too slow' });
   socket.reply({ type: 'error', code: 'bad_json', message: 'not JSON' });
-  socket.onmessage({ data: '{"v":2,"type":"pong"}' });
+  socket.onmessage({ data: '{"v":3,"type":"pong"}' });
   socket.reply({ type: 'error', code: 'some_future_code', message: 'new in a later server' });
   assert.deepEqual(seen, [['session', 'eval_timeout'], ['client', 'bad_json'], ['client', 'unsupported_version'], ['client', 'internal']]);
 });
@@ -334,4 +341,28 @@ test('requests made while disconnected wait for the new connection; close() ends
   await until(() => closed);
   assert.equal(client.closed, true);
   await assert.rejects(client.ping(), (e) => e.code === 'closed');
+});
+
+test('after a reconnection the rebuilt session counts its sequences from 0: its converged waits for its own keyframe, frames queued before the drop are dropped', async () => {
+  const client = await connect('ws://h/ws', { WebSocket: FakeSocket, decoder: new FakeMeshDecoder(), reconnectDelaysMs: [1], deferFrames: true });
+  const first = FakeSocket.last;
+  const session = await created(client, first);
+  for (let s = 0; s <= 16; ++s) first.frame({ kind: 'keyframe', sequence: s, triangleIds: [1, 2], mesh: square });
+  client.drainFrames();
+  first.reply({ type: 'converged', session: SESSION, version: 1, sequence: 16, triangles: 2 });
+  assert.ok(session.converged);
+  first.frame({ kind: 'keyframe', sequence: 17, triangleIds: [1, 2], mesh: square }); // queued, then the server dies
+  first.onclose({ code: 1006, reason: '' });
+  assert.equal(session.converged, false, 'not known to be final while disconnected');
+  await until(() => FakeSocket.last !== first && client.connected);
+  const second = FakeSocket.last;
+  second.reply({ type: 'subscribed', id: second.sent[0].id, session: SESSION, ...state });
+  second.frame({ kind: 'keyframe', sequence: 0, triangleIds: [7], mesh: { vertices: square.vertices.slice(0, 3), triangles: [[1, 2, 3]] } });
+  second.reply({ type: 'converged', session: SESSION, version: 1, sequence: 15, triangles: 1 });
+  assert.equal(session.converged, false, 'the converged of the rebuilt session names a frame not applied yet');
+  assert.equal(session.mesh.triangleCount, 2, 'the mesh on hand stays shown meanwhile');
+  assert.equal(client.drainFrames(), 0, "the old connection's queued keyframe is gone");
+  assert.equal(session.mesh.triangleCount, 1, "the rebuilt session's keyframe applied");
+  assert.equal(session.converged, false, 'sequence 0 of 15');
+  client.close();
 });

@@ -51,7 +51,7 @@ test('readFrameHeader rejects malformed headers', () => {
     return bytes;
   };
   assert.throws(() => readFrameHeader(corrupt(0, 0x41)), badFrame(/ISOM/));
-  assert.throws(() => readFrameHeader(corrupt(4, 2)), (e) => e.code === 'unsupported_version');
+  assert.throws(() => readFrameHeader(corrupt(4, 3)), (e) => e.code === 'unsupported_version');
   assert.throws(() => readFrameHeader(corrupt(5, 3)), badFrame(/kind/));
   assert.throws(() => readFrameHeader(buildFrame({ functionVersion: 0 })), badFrame(/version 0/));
   assert.throws(() => readFrameHeader(buildFrame({ kind: 'keyframe', removed: [1] })), badFrame(/removes nothing/));

@@ -57,7 +57,7 @@ test('every C++ sample validates against its schema and the union schema', () =>
 test('schemas reject malformed messages', () => {
   const session = samples.subscribe.session;
   const invalid = [
-    ['ping.json', { v: 2, type: 'ping' }],
+    ['ping.json', { v: 3, type: 'ping' }],
     ['ping.json', { v: 1, type: 'ping', extra: 1 }],
     ['ping.json', { v: 1, type: 'ping', id: 1.5 }],
     ['create.json', { v: 1, type: 'create', expression: 'x' }],

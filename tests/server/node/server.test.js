@@ -19,6 +19,7 @@ import {
   compareMeshes,
   converged,
   convergedAt,
+  positionTriangles,
   rawSocket,
   startServer,
   until,
@@ -99,6 +100,28 @@ describe('meshes', () => {
     });
   }
 
+  test('a version-1 and a version-2 client of one session end with the same triangles at bit-equal positions, through a slider move', async () => {
+    // client() checks every frame of both after it is applied (FrameChecker): version 2's deltas
+    // are decoded against the mesh the library holds (PROTOCOL.md 4.5).
+    const [v1, v2] = await Promise.all([client(server, { protocolVersion: 1 }), client(server, { protocolVersion: 2 })]);
+    try {
+      const first = await v2.create({ expression: 'x^2+y^2+z^2+cos(3x)=a', parameters: { a: 4 }, box: BOX, constraints: { triangles: 20000 } });
+      const other = await v1.subscribe(first.id);
+      await Promise.all([converged(first), converged(other)]);
+      assert.deepEqual(positionTriangles(first.mesh), positionTriangles(other.mesh));
+      await first.update({ parameters: { a: 4.5 } });
+      await Promise.all([convergedAt(first, first.state.version), convergedAt(other, first.state.version)]);
+      assert.deepEqual(positionTriangles(first.mesh), positionTriangles(other.mesh));
+      assert.equal(first.stats.resyncs + other.stats.resyncs, 0);
+      assert.ok(first.stats.deltas > 0, 'version-2 deltas were applied');
+      // The point of version 2: fewer bytes for the same mesh.
+      assert.ok(first.stats.bytes < other.stats.bytes, `version 2: ${first.stats.bytes} bytes, version 1: ${other.stats.bytes}`);
+    } finally {
+      v1.close();
+      v2.close();
+    }
+  });
+
   test('two subscribers, one of them joining late, end with identical meshes', async () => {
     const [a, b, c] = await Promise.all([client(server), client(server), client(server)]);
     try {
@@ -149,7 +172,9 @@ describe('meshes', () => {
 describe('resources', () => {
   test('a client that stops reading for 5 s keeps server memory bounded, then converges', async () => {
     await withServer(['--queue-bytes', '65536'], async (server) => {
-      const [driver, reader] = await Promise.all([client(server), client(server)]);
+      // Version 1: its moves re-send whole meshes, the bytes this test needs to back the
+      // server's writes up (version 2's moves are a few bytes a vertex).
+      const [driver, reader] = await Promise.all([client(server, { protocolVersion: 1 }), client(server, { protocolVersion: 1 })]);
       try {
         // Two sessions whose every version moves every vertex, so that each re-sends its whole
         // mesh: more bytes in 5 s than the kernel's socket buffers hold (200,000 triangles each:

@@ -1,0 +1,627 @@
+// The mesh of an octree's frontier, steps 2 to 6 of phase 1 (see polygonizer.cpp for the whole):
+// 2. corner values of the leaves, evaluated once each, in batches;
+// 3. crossings: each crossed leaf edge is narrowed by bisection to the step of the finest leaf
+//    where f changes sign (crossing_vertices.h), which names its vertex, so leaves of different
+//    sizes sharing a lattice line share the vertex;
+// 4. the frontier is graded along the surface (a leaf is split while a neighbour across a face
+//    the surface crosses is two levels finer), then Marching Cubes 33 runs in every leaf
+//    (leaf_mesher.h), with crack patching where a neighbour is finer; leaves whose faces do not
+//    match their finer neighbours are split and everything is meshed again, until all match. The
+//    thesis refines every surface cell to one common depth instead, which is simpler but lets one
+//    small feature (a thin neck, a crease) refine the whole surface: millions of triangles where
+//    tens of thousands suffice. These splits belong to this mesh only: the octree keeps its own
+//    frontier, so that its final state does not depend on when meshes were made;
+// 5. one root per crossing used, found on its finest step by safeguarded Newton iteration with
+//    the gradient (edge_roots.h); crossings that are poles or jumps are no roots, and the
+//    triangles touching them are dropped;
+// 6. thin triangle cleanup (thin_triangle_cleanup.h), then adjacency and base edges
+//    (mesh/topology.h).
+// Every parallel step stores its results by task index and merges them in index order, and
+// vertices are numbered by crossing, so the mesh is the same for every thread count.
+#include "polygonize/frontier_mesher.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include <glm/geometric.hpp>
+
+#include "mesh/topology.h"
+#include "polygonize/crossing_vertices.h"
+#include "polygonize/edge_roots.h"
+#include "polygonize/leaf_index.h"
+#include "polygonize/leaf_mesher.h"
+#include "polygonize/mc33.h"
+#include "polygonize/thin_triangle_cleanup.h"
+
+namespace isomesh {
+namespace {
+constexpr std::size_t kPointsPerTask = 1024;
+constexpr std::size_t kEdgesPerTask = 256;
+constexpr std::size_t kCellsPerTask = 256;
+/// Cleanup thresholds; the edge length is relative to the lattice step of the deepest leaf.
+constexpr double kMinEdgeFraction = 0.1;
+constexpr double kMinQuality = 0.1;
+
+glm::dvec3 unit_or_zero(const glm::dvec3& v) {
+    const double length = glm::length(v);
+    return length > 0.0 && std::isfinite(length) ? v / length : glm::dvec3(0.0);
+}
+
+std::size_t task_count(std::size_t items, std::size_t per_task) {
+    return (items + per_task - 1) / per_task;
+}
+
+std::vector<CellId> cells_of(const std::vector<FrontierCell>& frontier) {
+    std::vector<CellId> cells;
+    cells.reserve(frontier.size());
+    for (const FrontierCell& f : frontier) cells.push_back(f.cell);
+    return cells;
+}
+
+int deepest(const std::vector<FrontierCell>& frontier) {
+    int depth = 0;
+    for (const FrontierCell& f : frontier) depth = std::max(depth, f.cell.depth);
+    return depth;
+}
+
+/// Evaluates f, in batches, at the corners of `leaves` not in `values`.
+void evaluate_corners(EvaluatorPool& workers, const Lattice& lattice,
+                      const std::vector<CellId>& leaves, ValueMap& values,
+                      const WorkBudget& budget) {
+    std::vector<std::uint64_t> missing;
+    for (const CellId& cell : leaves) {
+        for (int c = 0; c < 8; ++c) {
+            const std::uint64_t key = Lattice::key(lattice.corner(cell, c));
+            if (!values.contains(key)) missing.push_back(key);
+        }
+    }
+    std::sort(missing.begin(), missing.end());
+    missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
+    std::vector<double> results(missing.size());
+    workers.for_each(task_count(missing.size(), kPointsPerTask),
+                     [&](std::size_t task, CountingEvaluator& evaluator) {
+                         if (budget.cancelled()) return;
+                         const std::size_t begin = task * kPointsPerTask;
+                         const std::size_t n = std::min(kPointsPerTask, missing.size() - begin);
+                         std::vector<double> x(n), y(n), z(n);
+                         for (std::size_t i = 0; i < n; ++i) {
+                             const glm::dvec3 p = lattice.point(Lattice::unkey(missing[begin + i]));
+                             x[i] = p.x;
+                             y[i] = p.y;
+                             z[i] = p.z;
+                         }
+                         evaluator.values({x, y, z}, std::span(results).subspan(begin, n));
+                     });
+    if (budget.cancelled()) return;
+    for (std::size_t i = 0; i < missing.size(); ++i) values.emplace(missing[i], results[i]);
+}
+
+/// Locates the crossing of every edge of `leaves` whose ends are on different sides and that is
+/// not in `crossings` yet (crossing_vertices.h), on steps of `finest_depth`, adding the values it
+/// evaluates to `values`.
+void locate_crossings(EvaluatorPool& workers, const Lattice& lattice,
+                      const std::vector<CellId>& leaves, int finest_depth, ValueMap& values,
+                      IdMap<CrossingKey>& crossings, const WorkBudget& budget) {
+    struct Edge {
+        std::uint64_t key;
+        glm::u32vec3 lower;
+        int axis;
+        int depth;
+    };
+    std::vector<Edge> edges;
+    for (const CellId& cell : leaves) {
+        for (int e = 0; e < 12; ++e) {
+            const auto [c0, c1] = kEdgeCorners[e];
+            const glm::u32vec3 p0 = lattice.corner(cell, c0);
+            if (is_inside(values.at(Lattice::key(p0))) ==
+                is_inside(values.at(Lattice::key(lattice.corner(cell, c1))))) {
+                continue;
+            }
+            const std::uint64_t key = cell_edge_key(p0, e / 4, cell.depth);
+            if (!crossings.contains(key)) edges.push_back({key, p0, e / 4, cell.depth});
+        }
+    }
+    std::sort(edges.begin(), edges.end(),
+              [](const Edge& a, const Edge& b) { return a.key < b.key; });
+    edges.erase(std::unique(edges.begin(), edges.end(),
+                            [](const Edge& a, const Edge& b) { return a.key == b.key; }),
+                edges.end());
+    std::vector<CrossingKey> located(edges.size());
+    std::vector<ValueMap> evaluated(task_count(edges.size(), kEdgesPerTask));
+    workers.for_each(evaluated.size(), [&](std::size_t task, CountingEvaluator& evaluator) {
+        CornerCache cache(evaluator, lattice, &values);
+        const std::size_t end = std::min(edges.size(), (task + 1) * kEdgesPerTask);
+        for (std::size_t i = task * kEdgesPerTask; i < end && !budget.cancelled(); ++i) {
+            located[i] = locate_crossing(cache, lattice, edges[i].lower, edges[i].axis,
+                                         edges[i].depth, finest_depth);
+        }
+        evaluated[task] = std::move(cache.values());
+    });
+    if (budget.cancelled()) return;
+    for (ValueMap& part : evaluated) values.merge(part);
+    for (std::size_t i = 0; i < edges.size(); ++i) crossings.emplace(edges[i].key, located[i]);
+}
+
+/// Replaces each cell of `which` (a subsequence of `frontier`'s cells) by its subtree, keeping
+/// the octree order: a pending cell by its 8 children, pending too; a settled cell by the leaves
+/// of its classified subtree (split_settled), or, in a mesh of an unfinished octree (`preview`),
+/// by its 8 children as pending cells too (classifying a subtree there could cost more than the
+/// whole octree so far). The new cells are appended to `added`.
+std::vector<FrontierCell> split_cells(EvaluatorPool& workers, const Lattice& lattice,
+                                      const OctreeSettings& settings,
+                                      const std::vector<FrontierCell>& frontier,
+                                      const std::vector<CellId>& which, bool preview,
+                                      ValueMap& values, std::vector<CellId>& added,
+                                      const WorkBudget& budget) {
+    std::vector<std::vector<FrontierCell>> subtrees(which.size());
+    std::vector<ValueMap> evaluated(which.size());
+    std::size_t next = 0;
+    std::vector<CellState> states(which.size());
+    for (const FrontierCell& f : frontier) {
+        if (next < which.size() && f.cell == which[next]) states[next++] = f.state;
+    }
+    workers.for_each(which.size(), [&](std::size_t i, CountingEvaluator& evaluator) {
+        if (budget.cancelled()) return;
+        if (states[i] == CellState::Pending || preview) {
+            for (int octant = 0; octant < 8; ++octant)
+                subtrees[i].push_back({which[i].child(octant), CellState::Pending});
+        } else {
+            subtrees[i] =
+                split_settled(evaluator, lattice, settings, which[i], values, evaluated[i], budget);
+        }
+    });
+    std::vector<FrontierCell> result;
+    next = 0;
+    for (const FrontierCell& f : frontier) {
+        if (next < which.size() && f.cell == which[next]) {
+            const std::vector<FrontierCell>& subtree = subtrees[next];
+            result.insert(result.end(), subtree.begin(), subtree.end());
+            for (const FrontierCell& s : subtree) added.push_back(s.cell);
+            values.merge(evaluated[next]);
+            ++next;
+        } else {
+            result.push_back(f);
+        }
+    }
+    return result;
+}
+
+/// The surface's vertices on lattice edges: roots on the finest steps of the crossings used.
+struct CrossingRoots {
+    std::vector<CrossingKey> keys;  // sorted
+    std::vector<EdgeRoot> roots;
+};
+
+/// The crossings the leaves' triangles use, their roots not found yet.
+CrossingRoots crossings_used(const std::vector<LeafMeshes>& parts) {
+    CrossingRoots result;
+    for (const LeafMeshes& part : parts) {
+        for (const auto& triangle : part.triangles) {
+            for (VertexRef v : triangle) {
+                if (!(v & kExtraVertex)) result.keys.push_back(v);
+            }
+        }
+    }
+    std::sort(result.keys.begin(), result.keys.end());
+    result.keys.erase(std::unique(result.keys.begin(), result.keys.end()), result.keys.end());
+    result.roots.resize(result.keys.size());
+    return result;
+}
+
+/// Finds the roots of crossings [begin, end) of `crossings`.
+void find_roots(EvaluatorPool& workers, const Lattice& lattice, const ValueMap& values,
+                CrossingRoots& crossings, std::size_t begin, std::size_t end,
+                const WorkBudget& budget) {
+    workers.for_each(task_count(end - begin, kEdgesPerTask),
+                     [&](std::size_t task, CountingEvaluator& evaluator) {
+                         const std::size_t first = begin + task * kEdgesPerTask;
+                         const std::size_t last = std::min(end, first + kEdgesPerTask);
+                         for (std::size_t i = first; i < last && !budget.cancelled(); ++i) {
+                             crossings.roots[i] = find_edge_root(
+                                 evaluator, crossing_segment(values, lattice, crossings.keys[i]));
+                         }
+                     });
+}
+
+/// The mesh: a vertex per crossing that is a root, then the leaves' own vertices; triangles
+/// touching a crossing that is not a root (a pole, a jump) are left out.
+Mesh assemble(const CrossingRoots& crossings, const std::vector<LeafMeshes>& parts) {
+    constexpr std::uint32_t kNone = 0xffffffffu;
+    Mesh mesh;
+    std::vector<std::uint32_t> id(crossings.keys.size(), kNone);
+    for (std::size_t i = 0; i < crossings.keys.size(); ++i) {
+        if (!crossings.roots[i].found) continue;
+        id[i] = static_cast<std::uint32_t>(mesh.positions.size());
+        mesh.positions.push_back(crossings.roots[i].position);
+        mesh.normals.push_back(unit_or_zero(crossings.roots[i].gradient));
+        const double norm = glm::length(crossings.roots[i].gradient);
+        mesh.gradient_norms.push_back(std::isfinite(norm) ? norm : 0.0);
+    }
+    for (const LeafMeshes& part : parts) {
+        const auto offset = static_cast<std::uint32_t>(mesh.positions.size());
+        for (const auto& triangle : part.triangles) {
+            std::array<std::uint32_t, 3> t;
+            for (int k = 0; k < 3; ++k) {
+                const VertexRef v = triangle[k];
+                if (v & kExtraVertex) {
+                    t[k] = offset + static_cast<std::uint32_t>(v & ~kExtraVertex);
+                } else {
+                    const auto it =
+                        std::lower_bound(crossings.keys.begin(), crossings.keys.end(), v);
+                    t[k] = id[static_cast<std::size_t>(it - crossings.keys.begin())];
+                }
+            }
+            if (t[0] != kNone && t[1] != kNone && t[2] != kNone) mesh.triangles.push_back(t);
+        }
+        mesh.positions.insert(mesh.positions.end(), part.extra_positions.begin(),
+                              part.extra_positions.end());
+        mesh.normals.insert(mesh.normals.end(), part.extra_normals.begin(),
+                            part.extra_normals.end());
+        mesh.gradient_norms.insert(mesh.gradient_norms.end(), part.extra_gradient_norms.begin(),
+                                   part.extra_gradient_norms.end());
+    }
+    return mesh;
+}
+
+}  // namespace
+
+/// The mesh of a frontier (steps 2 to 6 of the file comment), made over one or several calls of
+/// advance(): the work goes in chunks of a few thousand leaves or crossings, the budget checked
+/// between them, and what a call leaves undone the next one takes up, so that the mesh does not
+/// depend on where budgets cut it.
+class FrontierMesher::Impl {
+  public:
+    Impl(EvaluatorPool& workers, const Lattice& lattice, const OctreeSettings& settings,
+         ValueMap& values, std::vector<FrontierCell> frontier, bool adjacency)
+        : adjacency_(adjacency),
+          workers_(workers),
+          lattice_(lattice),
+          settings_(settings),
+          values_(values),
+          frontier_(std::move(frontier)) {
+        preview_ = std::any_of(frontier_.begin(), frontier_.end(),
+                               [](const FrontierCell& f) { return f.state == CellState::Pending; });
+        leaves_ = cells_of(frontier_);
+        finest_ = deepest(frontier_);
+        fresh_ = leaves_;
+        unlocated_ = leaves_;
+        index_.emplace(leaves_);
+        states_.resize(leaves_.size());
+    }
+
+    /// Goes on until the mesh is made (true) or the budget is exhausted or cancelled (false).
+    bool advance(const WorkBudget& budget) {
+        budget_ = &budget;
+        while (stage_ != Stage::done) {
+            if (budget.cancelled() || !run_chunk()) return false;
+            if (stage_ != Stage::done && budget.exhausted()) return false;
+        }
+        return true;
+    }
+
+    /// The mesh. Precondition: advance() returned true.
+    PolygonizeResult take() { return std::move(result_); }
+
+  private:
+    /// Grades the frontier, then meshes every leaf; splits the leaves whose faces do not match
+    /// their finer neighbours, and again, until all match (leaves of equal size always do, so
+    /// this ends). Incremental: after a split, only the new leaves and the leaves across the
+    /// split cells' faces are graded and meshed again (a leaf's grading and mesh depend only on
+    /// itself and its face neighbours), so the result is that of meshing everything each time.
+    /// Then the roots of the crossings used, the mesh, its cleanup, its adjacency.
+    enum class Stage { corners, grade, split, locate, mesh, roots, assemble, clean, finish, done };
+
+    /// A leaf's meshing state, kept beside leaves_.
+    struct LeafState {
+        std::unique_ptr<LeafMeshes> mesh;  // none while it has no triangles (most leaves)
+        bool grade = true;                 // needs_grading must look at it (again)
+        bool stale = true;                 // its mesh must be made (again)
+    };
+
+    /// Leaves, crossings or cells handled between two looks at the budget.
+    static constexpr std::size_t kChunk = 4096;
+    /// Cells split between two looks: fewer, since a settled cell's split classifies its whole
+    /// subtree down to the finest depth (0.15 ms a cell on colonnade.vm: 4,096 took 612 ms).
+    static constexpr std::size_t kSplitChunk = 256;
+
+    /// One chunk of the current stage; false when cancelled midway (the chunk is done again).
+    bool run_chunk() {
+        switch (stage_) {
+            case Stage::corners:
+                return evaluate_fresh_corners();
+            case Stage::grade:
+                return select_chunk(&LeafState::grade, [this](std::size_t i, CountingEvaluator&) {
+                    return needs_grading(input(), leaves_[i]);
+                });
+            case Stage::split:
+                split_chunk();
+                return !budget_->cancelled();
+            case Stage::locate:
+                return locate_chunk();
+            case Stage::mesh:
+                return select_chunk(&LeafState::stale,
+                                    [this](std::size_t i, CountingEvaluator& evaluator) {
+                                        return !mesh_stale_leaf(i, evaluator);
+                                    });
+            case Stage::roots:
+                return roots_chunk();
+            case Stage::assemble:
+                result_.mesh = assemble(roots_, parts_);
+                stage_ = Stage::clean;
+                return true;
+            case Stage::clean:
+                clean();
+                return true;
+            case Stage::finish:
+                finish();
+                return !budget_->cancelled();
+            case Stage::done:
+                return true;
+        }
+        return true;
+    }
+
+    LeafMeshingInput input() const { return {lattice_, values_, crossings_, *index_}; }
+
+    bool evaluate_fresh_corners() {
+        const std::size_t n = std::min(kChunk, fresh_.size());
+        const std::vector<CellId> chunk(fresh_.end() - static_cast<std::ptrdiff_t>(n),
+                                        fresh_.end());
+        evaluate_corners(workers_, lattice_, chunk, values_, *budget_);
+        if (budget_->cancelled()) return false;  // corners are missing: nothing below may run
+        fresh_.resize(fresh_.size() - n);
+        if (fresh_.empty()) begin_selection(Stage::grade, &LeafState::grade);
+        return true;
+    }
+
+    /// Starts a stage that looks at every leaf with `flag` set.
+    void begin_selection(Stage stage, bool LeafState::*flag) {
+        stage_ = stage;
+        candidates_ = flagged(flag);
+        cursor_ = 0;
+        selected_.clear();
+    }
+
+    /// Runs `predicate` on the next chunk of candidates_, gathering those it holds for; once all
+    /// are seen, moves on: to splitting them if any, else to the next stage.
+    template <typename Predicate>
+    bool select_chunk(bool LeafState::*flag, const Predicate& predicate) {
+        const std::size_t end = std::min(candidates_.size(), cursor_ + kChunk);
+        const std::vector<std::size_t> chunk(candidates_.begin() + cursor_,
+                                             candidates_.begin() + end);
+        const std::vector<std::size_t> chosen = select(chunk, predicate);
+        if (budget_->cancelled()) return false;
+        for (std::size_t i : chunk) states_[i].*flag = false;
+        selected_.insert(selected_.end(), chosen.begin(), chosen.end());
+        cursor_ = end;
+        if (cursor_ < candidates_.size()) return true;
+        if (!selected_.empty()) {
+            begin_split();
+        } else if (stage_ == Stage::grade) {
+            stage_ = Stage::locate;
+        } else {
+            begin_roots();
+        }
+        return true;
+    }
+
+    void begin_split() {
+        to_split_.clear();
+        for (std::size_t i : selected_) to_split_.push_back(leaves_[i]);
+        split_cursor_ = 0;
+        stage_ = Stage::split;
+    }
+
+    void split_chunk() {
+        const std::size_t end = std::min(to_split_.size(), split_cursor_ + kSplitChunk);
+        split({to_split_.begin() + split_cursor_, to_split_.begin() + end});
+        split_cursor_ = end;
+        if (split_cursor_ == to_split_.size()) stage_ = Stage::corners;
+    }
+
+    bool locate_chunk() {
+        const std::size_t n = std::min(kChunk, unlocated_.size());
+        const std::vector<CellId> chunk(unlocated_.end() - static_cast<std::ptrdiff_t>(n),
+                                        unlocated_.end());
+        locate_crossings(workers_, lattice_, chunk, finest_, values_, crossings_, *budget_);
+        if (budget_->cancelled()) return false;
+        unlocated_.resize(unlocated_.size() - n);
+        if (unlocated_.empty()) begin_selection(Stage::mesh, &LeafState::stale);
+        return true;
+    }
+
+    void begin_roots() {
+        for (LeafState& state : states_) {
+            if (state.mesh) parts_.push_back(std::move(*state.mesh));
+        }
+        states_.clear();
+        roots_ = crossings_used(parts_);
+        cursor_ = 0;
+        stage_ = Stage::roots;
+    }
+
+    bool roots_chunk() {
+        const std::size_t end = std::min(roots_.keys.size(), cursor_ + kChunk);
+        find_roots(workers_, lattice_, values_, roots_, cursor_, end, *budget_);
+        if (budget_->cancelled()) return false;
+        cursor_ = end;
+        if (cursor_ == roots_.keys.size()) stage_ = Stage::assemble;
+        return true;
+    }
+
+    void clean() {
+        PolygonizeStats& stats = result_.stats;
+        stats.cells = leaves_.size();
+        stats.depth = finest_;
+        for (const FrontierCell& f : frontier_) {
+            stats.unresolved_cells += f.state != CellState::Leaf;
+            stats.pending_cells += f.state == CellState::Pending;
+        }
+        const glm::dvec3 step = lattice_.box().size() / std::ldexp(1.0, stats.depth);
+        const ThinTriangleSettings cleanup{kMinEdgeFraction * std::min({step.x, step.y, step.z}),
+                                           kMinQuality};
+        const ThinTriangleReport report =
+            remove_thin_triangles(result_.mesh, box_faces(result_.mesh, lattice_.box()), cleanup);
+        stats.collapses = report.collapses;
+        stats.flips = report.flips;
+        stage_ = Stage::finish;
+    }
+
+    void finish() {
+        if (adjacency_) build_adjacency(result_.mesh);
+        stage_ = Stage::done;
+    }
+
+    /// Meshes stale leaf i; false when it did not match.
+    bool mesh_stale_leaf(std::size_t i, CountingEvaluator& evaluator) {
+        LeafState& state = states_[i];
+        LeafMeshes mesh;
+        mesh_leaf(evaluator, input(), leaves_[i], mesh);
+        const bool matched = mesh.unmatched.empty();
+        state.mesh = mesh.triangles.empty() && mesh.extra_positions.empty()
+                         ? nullptr
+                         : std::make_unique<LeafMeshes>(std::move(mesh));
+        return matched;
+    }
+
+    /// The indices of the leaves with `flag` set, in order.
+    std::vector<std::size_t> flagged(bool LeafState::*flag) const {
+        std::vector<std::size_t> out;
+        for (std::size_t i = 0; i < states_.size(); ++i) {
+            if (states_[i].*flag) out.push_back(i);
+        }
+        return out;
+    }
+
+    /// Those of `candidates` (leaf indices, in order) for which `predicate` holds, evaluated in
+    /// parallel (the predicate may take the task's evaluator), in order.
+    template <typename Predicate>
+    std::vector<std::size_t> select(const std::vector<std::size_t>& candidates,
+                                    const Predicate& predicate) {
+        std::vector<std::uint8_t> chosen(candidates.size());
+        workers_.for_each(
+            task_count(candidates.size(), kCellsPerTask),
+            [&](std::size_t task, CountingEvaluator& evaluator) {
+                const std::size_t end = std::min(candidates.size(), (task + 1) * kCellsPerTask);
+                for (std::size_t k = task * kCellsPerTask; k < end && !budget_->cancelled(); ++k) {
+                    if constexpr (std::is_invocable_v<Predicate, std::size_t>) {
+                        chosen[k] = predicate(candidates[k]);
+                    } else {
+                        chosen[k] = predicate(candidates[k], evaluator);
+                    }
+                }
+            });
+        std::vector<std::size_t> result;
+        for (std::size_t k = 0; k < candidates.size(); ++k) {
+            if (chosen[k]) result.push_back(candidates[k]);
+        }
+        return result;
+    }
+
+    /// Splits the leaves `cells` (in order), keeping the index, the leaves' states and the
+    /// crossings up to date.
+    void split(const std::vector<CellId>& cells) {
+        const std::size_t before = fresh_.size();
+        frontier_ = split_cells(workers_, lattice_, settings_, frontier_, cells, preview_, values_,
+                                fresh_, *budget_);
+        std::vector<CellId> old_leaves = std::exchange(leaves_, cells_of(frontier_));
+        carry_states(old_leaves);
+        for (const CellId& cell : cells) {
+            for (const CellId& n : index_->face_neighbours(cell)) {
+                LeafState& state = states_[position(n)];
+                state.grade = state.stale = true;
+            }
+        }
+        const int finest = deepest(frontier_);
+        if (finest != finest_) {
+            // Crossings are named by steps of the finest leaf: all are located again.
+            finest_ = finest;
+            crossings_.clear();
+            unlocated_ = leaves_;
+            for (LeafState& state : states_) state.stale = true;
+        } else {
+            unlocated_.insert(unlocated_.end(), fresh_.begin() + before, fresh_.end());
+        }
+    }
+
+    /// Moves the states of the leaves kept from `old_leaves` to their places in leaves_; the
+    /// leaves that replaced a split one start fresh, and the index learns of them. (Both lists
+    /// are in octree order, a split cell's leaves where it was.)
+    void carry_states(const std::vector<CellId>& old_leaves) {
+        std::vector<LeafState> states(leaves_.size());
+        std::size_t j = 0;
+        for (std::size_t i = 0; i < old_leaves.size(); ++i) {
+            const CellId& old = old_leaves[i];
+            if (j < leaves_.size() && leaves_[j] == old) {
+                states[j++] = std::move(states_[i]);
+                continue;
+            }
+            const std::size_t first = j;  // old was split: its subtree's leaves follow
+            while (j < leaves_.size() && leaves_[j].depth > old.depth &&
+                   leaves_[j].ancestor(old.depth) == old) {
+                ++j;
+            }
+            index_->replace(old, std::span(leaves_).subspan(first, j - first));
+        }
+        assert(j == leaves_.size());
+        states_ = std::move(states);
+    }
+
+    /// The index in leaves_ of `leaf` (leaves_ is in octree order: a binary search).
+    std::size_t position(const CellId& leaf) const {
+        const std::uint64_t order = lattice_.octree_order(leaf);
+        const auto it = std::lower_bound(
+            leaves_.begin(), leaves_.end(), order,
+            [&](const CellId& c, std::uint64_t o) { return lattice_.octree_order(c) < o; });
+        assert(it != leaves_.end() && *it == leaf);
+        return static_cast<std::size_t>(it - leaves_.begin());
+    }
+
+    bool adjacency_;  // build the mesh's adjacency at the end (PolygonizeSettings::adjacency)
+    EvaluatorPool& workers_;
+    const Lattice& lattice_;
+    const OctreeSettings& settings_;
+    ValueMap& values_;
+    const WorkBudget* budget_ = nullptr;  // of the advance() under way
+    std::vector<FrontierCell> frontier_;
+    bool preview_ = false;  // some cell is pending: the octree is unfinished
+    std::vector<CellId> leaves_;
+    std::optional<LeafIndex> index_;  // of leaves_
+    std::vector<LeafState> states_;   // of leaves_
+    int finest_ = 0;
+    IdMap<CrossingKey> crossings_;
+    std::vector<CellId> fresh_;      // leaves whose corners are not evaluated yet
+    std::vector<CellId> unlocated_;  // leaves whose crossings are not located yet
+    Stage stage_ = Stage::corners;
+    std::vector<std::size_t> candidates_;  // leaves the current selection looks at
+    std::size_t cursor_ = 0;               // in candidates_, or in roots_.keys
+    std::vector<std::size_t> selected_;    // those of candidates_ seen so far that it chose
+    std::vector<CellId> to_split_;
+    std::size_t split_cursor_ = 0;
+    std::vector<LeafMeshes> parts_;
+    CrossingRoots roots_;
+    PolygonizeResult result_;
+};
+
+FrontierMesher::FrontierMesher(EvaluatorPool& workers, const Lattice& lattice,
+                               const OctreeSettings& settings, ValueMap& values,
+                               std::vector<FrontierCell> frontier, bool adjacency)
+    : impl_(std::make_unique<Impl>(workers, lattice, settings, values, std::move(frontier),
+                                   adjacency)) {}
+
+FrontierMesher::~FrontierMesher() = default;
+
+bool FrontierMesher::advance(const WorkBudget& budget) {
+    return impl_->advance(budget);
+}
+
+PolygonizeResult FrontierMesher::take() {
+    return impl_->take();
+}
+
+}  // namespace isomesh
