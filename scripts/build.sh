@@ -6,6 +6,7 @@ cd "$(dirname "$0")/.."
 jobs=$(nproc)
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release "$@"
 cmake --build build -j "$jobs"
+echo "build: C++ built in $SECONDS s"
 
 # npm packages, pinned by each folder's package-lock.json; installed only when node_modules is
 # missing or older than the lock file. Vite 6 runs on Debian 12's Node 18 as on newer ones.

@@ -144,6 +144,11 @@ const std::vector<Option>& options() {
                        &ServerConfig::worker_threads, 0, 256),
         integer_option("slice-us", "refinement time slice per turn of a session, microseconds",
                        &ServerConfig::slice_us, 100, 1'000'000),
+        integer_option(
+            "first-mesh-ms",
+            "CPU time within which the first mesh of a session (or of a new box) is made, "
+            "whatever the function; later keyframes improve it",
+            &ServerConfig::first_mesh_ms, 1, 60'000),
         integer_option("batch-ms", "longest wait before refinement deltas are sent",
                        &ServerConfig::batch_ms, 1, 10'000),
         integer_option("batch-triangles", "triangles changed that trigger sending a delta",

@@ -30,7 +30,9 @@ struct ServerConfig {
     // work
     unsigned worker_threads = 0;    ///< 0: one per core
     std::uint32_t slice_us = 2000;  ///< refinement time slice per turn of a session
-    std::uint32_t batch_ms = 20;    ///< deltas are flushed at least this often while refining
+    /// CPU time within which the first mesh of a session (or of a new box) is made.
+    std::uint32_t first_mesh_ms = 10;
+    std::uint32_t batch_ms = 20;  ///< deltas are flushed at least this often while refining
     std::uint32_t batch_triangles = 2000;  ///< ... and as soon as this many triangles changed
     unsigned draco_speed = 2;  ///< Draco encoder speed: 0 smallest frames ... 10 fastest
 

@@ -16,6 +16,7 @@ std::chrono::milliseconds to_duration(double seconds) {
 SessionSettings session_settings(const ServerConfig& config) {
     SessionSettings s;
     s.slice = std::chrono::microseconds(config.slice_us);
+    s.first_mesh_budget = std::chrono::milliseconds(config.first_mesh_ms);
     s.batch_interval = std::chrono::milliseconds(config.batch_ms);
     s.batch_triangles = config.batch_triangles;
     s.eval_timeout = std::chrono::milliseconds(config.eval_timeout_ms);

@@ -17,7 +17,10 @@ void OutputQueue::expect_keyframe(const protocol::SessionId& session) {
     Lock lock(mutex_);
     if (closed_) return;
     drop_frames(lock, session, true);
-    streams_[session] = Stream{};
+    Stream& stream = streams_[session];
+    const std::optional<std::uint64_t> written = stream.written;  // those frames were received
+    stream = Stream{};
+    stream.written = written;
 }
 
 void OutputQueue::forget(const protocol::SessionId& session, bool drop_queued) {
@@ -34,7 +37,8 @@ bool OutputQueue::push_keyframe(const protocol::SessionId& session,
     drop_frames(lock, session, true);
     stream->second.state = StreamState::live;
     stream->second.sequence = protocol::frame_sequence(*frame);
-    enqueue(lock, {Outgoing::Kind::keyframe, nullptr, std::move(frame), session, created});
+    enqueue(lock, {Outgoing::Kind::keyframe, nullptr, std::move(frame), session,
+                   stream->second.sequence, created});
     const bool wake = claim_writer(lock);
     lock.unlock();
     if (metrics_) metrics_->keyframes_sent.add();
@@ -69,7 +73,8 @@ OutputQueue::DeltaOutcome OutputQueue::push_delta(const protocol::SessionId& ses
         return DeltaOutcome::dropped_stalled;
     }
     stream->second.sequence = protocol::frame_sequence(*frame);
-    enqueue(lock, {Outgoing::Kind::delta, nullptr, std::move(frame), session, created});
+    enqueue(lock, {Outgoing::Kind::delta, nullptr, std::move(frame), session,
+                   stream->second.sequence, created});
     const bool wake = claim_writer(lock);
     lock.unlock();
     if (metrics_) metrics_->deltas_sent.add();
@@ -81,7 +86,7 @@ void OutputQueue::push_text(std::shared_ptr<const std::string> text, bool droppa
     Lock lock(mutex_);
     if (closed_) return;
     if (droppable && queued_bytes_ > 0 && queued_bytes_ + text->size() > budget_) return;
-    enqueue(lock, {Outgoing::Kind::text, std::move(text), nullptr, {}, Clock::now()});
+    enqueue(lock, {Outgoing::Kind::text, std::move(text), nullptr, {}, {}, Clock::now()});
     if (text_bytes_ > budget_) overflowed_ = true;
     const bool wake = claim_writer(lock) || overflowed_;
     lock.unlock();
@@ -99,7 +104,8 @@ bool OutputQueue::push_session_text(const protocol::SessionId& session,
         if (s.state != StreamState::live || !s.sequence || *s.sequence < *sequence) return false;
     }
     if (droppable && queued_bytes_ > 0 && queued_bytes_ + text->size() > budget_) return false;
-    enqueue(lock, {Outgoing::Kind::text, std::move(text), nullptr, {}, Clock::now()});
+    enqueue(lock,
+            {Outgoing::Kind::text, std::move(text), nullptr, session, sequence, Clock::now()});
     if (text_bytes_ > budget_) overflowed_ = true;
     const bool wake = claim_writer(lock) || overflowed_;
     lock.unlock();
@@ -128,7 +134,11 @@ std::optional<Outgoing> OutputQueue::next() {
     Outgoing message = std::move(queue_.front());
     queue_.pop_front();
     if (!message.binary()) text_bytes_ -= message.size();
-    if (message.binary()) uncount(lock, message.session, message.size());
+    if (message.binary()) {
+        uncount(lock, message.session, message.size());
+        if (auto stream = streams_.find(message.session); stream != streams_.end())
+            stream->second.written = message.sequence;
+    }
     in_flight_bytes_ = message.size();
     return message;
 }
@@ -205,8 +215,31 @@ void OutputQueue::drop_frames(const Lock& lock, const protocol::SessionId& sessi
         bytes += it->size();
         if (metrics_ && it->kind == Outgoing::Kind::delta) metrics_->deltas_dropped.add();
     }
+    const bool any = dropped != queue_.end();
     queue_.erase(dropped, queue_.end());
     uncount(lock, session, bytes);
+    queued_bytes_ -= bytes;
+    if (metrics_) metrics_->queued_bytes.add(-static_cast<std::int64_t>(bytes));
+    if (any) drop_unreached_messages(lock, session);
+}
+
+void OutputQueue::drop_unreached_messages(const Lock&, const protocol::SessionId& session) {
+    auto stream = streams_.find(session);
+    std::optional<std::uint64_t> reached;  // the last frame of the session before this point
+    if (stream != streams_.end()) reached = stream->second.written;
+    std::deque<Outgoing> kept;
+    std::size_t bytes = 0;
+    for (Outgoing& m : queue_) {
+        if (m.session == session && m.binary()) reached = m.sequence;
+        if (m.session == session && !m.binary() && m.sequence &&
+            (!reached || *reached < *m.sequence)) {
+            bytes += m.size();
+            continue;
+        }
+        kept.push_back(std::move(m));
+    }
+    queue_ = std::move(kept);
+    text_bytes_ -= bytes;
     queued_bytes_ -= bytes;
     if (metrics_) metrics_->queued_bytes.add(-static_cast<std::int64_t>(bytes));
 }

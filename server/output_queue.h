@@ -15,7 +15,8 @@
 // keyframe. A session's own messages (push_session_text) go only to a connection that follows
 // it, and one naming a sequence number (`progress`, `converged`) only once this connection's
 // stream has reached that frame: a message never names a frame its connection has not received
-// first (a lagging connection gets `converged` again after its catch-up keyframe). Text replies
+// first (a lagging connection gets `converged` again after its catch-up keyframe); such a message
+// still queued goes with the frame it names when that frame is dropped. Text replies
 // are never dropped (their number is bounded by the client's own
 // requests), except `progress`, which is informational; a client that lets unsent text messages
 // pile up beyond the budget (it sends requests but does not read the replies) is marked
@@ -45,7 +46,10 @@ struct Outgoing {
     Kind kind = Kind::text;
     std::shared_ptr<const std::string> text;  ///< for Kind::text
     std::shared_ptr<const Bytes> frame;       ///< for keyframes and deltas
-    protocol::SessionId session;              ///< for frames
+    protocol::SessionId session;              ///< for frames and messages about a session
+    /// A frame's sequence number, or the one a message about the session names (`progress`,
+    /// `converged`).
+    std::optional<std::uint64_t> sequence;
     Clock::time_point created{};
 
     bool binary() const { return kind != Kind::text; }
@@ -119,6 +123,9 @@ class OutputQueue {
     /// Removes queued (not in-flight) deltas of `session`, and its keyframes if `keyframes_too`;
     /// counts dropped deltas.
     void drop_frames(const Lock&, const protocol::SessionId& session, bool keyframes_too);
+    /// Removes the session's queued messages naming a frame that will not reach the connection
+    /// before them (it was dropped), walking the queue in the order it is written.
+    void drop_unreached_messages(const Lock&, const protocol::SessionId& session);
     /// Takes `bytes` of the session's frames off its stream's count.
     void uncount(const Lock&, const protocol::SessionId& session, std::size_t bytes);
     void notify(bool wake);
@@ -135,6 +142,7 @@ class OutputQueue {
         StreamState state = StreamState::awaiting;
         std::optional<std::uint64_t> sequence;  // of the last frame queued, while live
         std::size_t queued_bytes = 0;           // frames queued, not in flight
+        std::optional<std::uint64_t> written;   // of the last frame handed to the writer
     };
     std::map<protocol::SessionId, Stream> streams_;
     bool writer_busy_ = false;

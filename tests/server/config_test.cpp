@@ -81,7 +81,7 @@ TEST(ParseConfig, help_is_requested_and_lists_every_variable) {
     EXPECT_TRUE(std::holds_alternative<HelpRequested>(parse({"--port", "1", "--help"})));
     const std::string usage = config_usage();
     for (const char* name : {"--port", "ISOMESH_PORT", "--queue-bytes", "ISOMESH_QUEUE_BYTES",
-                             "--eval-timeout-ms", "ISOMESH_LOG_LEVEL"})
+                             "--eval-timeout-ms", "--first-mesh-ms", "ISOMESH_LOG_LEVEL"})
         EXPECT_NE(usage.find(name), std::string::npos) << name;
 }
 

@@ -217,6 +217,34 @@ TEST(OutputQueue, session_messages_never_name_a_frame_the_connection_has_not_rea
     EXPECT_FALSE(queue.push_session_text(s, message, std::nullopt));  // after `closed`
 }
 
+TEST(OutputQueue, messages_naming_a_dropped_frame_go_with_it) {
+    OutputQueue queue(1000, {}, nullptr);
+    const protocol::SessionId s{{7}};
+    const auto named = [](std::uint64_t sequence) {
+        return std::make_shared<const std::string>("progress " + std::to_string(sequence));
+    };
+    queue.expect_keyframe(s);
+    ASSERT_TRUE(queue.push_keyframe(s, numbered_frame(0)));
+    drain(queue);  // keyframe 0 reached the connection
+    ASSERT_TRUE(queue.push_session_text(s, named(0), 0));
+    ASSERT_EQ(queue.push_delta(s, numbered_frame(1)), OutputQueue::DeltaOutcome::queued);
+    ASSERT_TRUE(queue.push_session_text(s, named(1), 1));
+    // A keyframe replacing the queued delta 1 (phase 1 replaced the mesh) takes its message along.
+    ASSERT_TRUE(queue.push_keyframe(s, numbered_frame(2)));
+    ASSERT_TRUE(queue.push_session_text(s, named(2), 2));
+    ASSERT_EQ(queue.push_delta(s, numbered_frame(3)), OutputQueue::DeltaOutcome::queued);
+    ASSERT_TRUE(queue.push_session_text(s, named(3), 3));
+    // Over budget: delta 3 is dropped, and the message naming it too.
+    ASSERT_EQ(queue.push_delta(s, numbered_frame(4, 2000)),
+              OutputQueue::DeltaOutcome::dropped_stalled);
+    std::vector<Outgoing> written;
+    drain(queue, &written);
+    std::vector<std::string> order;
+    for (const Outgoing& m : written)
+        order.push_back(m.binary() ? "frame " + std::to_string(*m.sequence) : *m.text);
+    EXPECT_EQ(order, (std::vector<std::string>{"progress 0", "frame 2", "progress 2"}));
+}
+
 TEST(OutputQueue, session_bytes_count_the_frames_queued_for_a_session) {
     OutputQueue queue(100000, {}, nullptr);
     const protocol::SessionId a{{1}}, b{{2}};

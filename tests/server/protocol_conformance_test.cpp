@@ -44,7 +44,12 @@ void expect_sequences_reached(const TestConnection& connection) {
 }
 
 TEST(MeshService, first_keyframe_meeting_the_constraints_carries_the_converged_flag) {
-    Fixture f;
+    // Time enough for the first step to finish the sphere's phase 1 (within its cap of cells) on
+    // any machine: at the default 10 ms a slow one (the sanitizer build) sends a resolving first
+    // keyframe, rightly unflagged, and the test would not test what it says.
+    ServerConfig config = test_config();
+    config.first_mesh_ms = 10'000;
+    Fixture f(config);
     TestConnection a(f.service);
     const auto session = create(a, create_request("x^2+y^2+z^2=4", 10, {}, 1));  // below phase 1
     ASSERT_TRUE(wait_converged(a, session));
