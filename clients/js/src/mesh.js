@@ -133,7 +133,10 @@ export class VertexTable {
 }
 
 export class SessionMesh {
-  /** @param {{initialCapacity?: number}} [options] */
+  /**
+   * @param {{initialCapacity?: number, timing?: boolean}} [options] timing: count the time spent
+   *   decoding version-2 deltas in timing.decodeV2Ms (bench/js_apply.mjs)
+   */
   constructor(options = {}) {
     this.slots = new TriangleSlots(options.initialCapacity ?? 4096);
     this.vertices = new VertexTable((options.initialCapacity ?? 4096) / 2);
@@ -143,6 +146,7 @@ export class SessionMesh {
     // Version 2 (PROTOCOL.md 4.5): the mesh as deltas name it, and the last keyframe's grid.
     this.held = null;
     this.grid = null;
+    this.timing = options.timing ? { decodeV2Ms: 0 } : null;
   }
 
   get triangleCount() {
@@ -201,12 +205,15 @@ export class SessionMesh {
   #decodeV2(frame) {
     if (frame.header.version !== 2 || frame.removed !== null) return true;
     if (!this.held) return false;
+    const start = this.timing && performance.now();
     try {
       Object.assign(frame, decodeDeltaV2(frame.header, frame.body, this.held, this.grid));
     } catch (error) {
       if (error?.code !== 'bad_frame') throw error;
       frame.error = error;
       return false;
+    } finally {
+      if (this.timing) this.timing.decodeV2Ms += performance.now() - start;
     }
     return true;
   }
