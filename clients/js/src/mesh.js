@@ -15,8 +15,9 @@
 // Vertices (VertexTable) are reference-counted by the triangles that use them and dropped when
 // unused: every payload carries all the vertices its triangles use.
 
-import { decodeDeltaV2 } from './delta_v2.js';
+import { applyDeltaV2 } from './delta_v2.js';
 import { HeldMesh } from './held_mesh.js';
+import { IdIndex, NONE } from './id_index.js';
 import { TriangleSlots } from './slots.js';
 
 export const Outcome = Object.freeze({
@@ -29,11 +30,11 @@ export const Outcome = Object.freeze({
 
 /**
  * The live vertices: global id -> a row of typed arrays (position, normal, number of triangles
- * using it). Rows of dropped vertices are reused.
+ * using it). Rows of dropped vertices are reused. rowOf (an IdIndex) iterates as a Map would.
  */
 export class VertexTable {
   constructor(capacity = 1024) {
-    this.rowOf = new Map();
+    this.rowOf = new IdIndex(capacity);
     this.free = [];
     this.size = 0; // rows ever used
     this.#allocate(Math.max(1, capacity));
@@ -44,13 +45,13 @@ export class VertexTable {
   }
 
   has(id) {
-    return this.rowOf.has(id);
+    return this.rowOf.get(id) !== NONE;
   }
 
   /** {position: [x, y, z], normal: [x, y, z], uses} of vertex `id`, or undefined. */
   get(id) {
     const row = this.rowOf.get(id);
-    if (row === undefined) return undefined;
+    if (row === NONE) return undefined;
     const p = this.positions.subarray(3 * row, 3 * row + 3);
     const n = this.normals.subarray(3 * row, 3 * row + 3);
     return { position: Array.from(p), normal: Array.from(n), uses: this.uses[row] };
@@ -67,7 +68,7 @@ export class VertexTable {
    */
   set(id, positions, normals, p) {
     let row = this.rowOf.get(id);
-    if (row === undefined) {
+    if (row === NONE) {
       row = this.free.pop() ?? this.#newRow();
       this.rowOf.set(id, row);
       this.uses[row] = 0;
@@ -173,15 +174,19 @@ export class SessionMesh {
       this.synchronized = false;
       return Outcome.gap;
     }
-    if (!this.#decodeV2(frame) || !this.#consistent(frame)) {
+    // A version-2 delta is decoded here, and applied to the held mesh as it is decoded. It needs no
+    // consistency check: the decoder found every triangle it removes in the held mesh and gave
+    // new ids no held triangle had, and the held mesh has the slot table's triangles.
+    const v2 = h.version === 2 && frame.removed === null;
+    if (v2 ? !this.#decodeV2(frame) : !this.#consistent(frame)) {
       this.synchronized = false;
       return Outcome.inconsistent;
     }
     for (const id of frame.removed) this.#removeTriangle(id);
     const changed = this.#add(frame);
     this.slots.compact();
-    if (changed.size > 0) this.#rewriteVertices(changed);
-    this.held?.apply(frame);
+    if (changed.size > 0) this.#rewriteVertices(changed, v2 ? this.held : null);
+    if (!v2) this.held?.apply(frame);
     this.#accept(h);
     return Outcome.applied;
   }
@@ -192,22 +197,21 @@ export class SessionMesh {
       this.held = this.grid = null;
       return;
     }
-    this.held ??= new HeldMesh();
+    this.held ??= new HeldMesh(this.slots.capacity);
     this.held.apply(keyframe);
     this.grid = keyframe.header.grid;
   }
 
   /**
-   * A version-2 delta (decodeFrame left it undecoded) decoded against the held mesh, in place:
-   * the frame gets removed, triangleIds and mesh as a version-1 delta has them. False when it does
-   * not fit (a resync follows).
+   * A version-2 delta (decodeFrame left it undecoded) decoded against the held mesh, which it
+   * changes: the frame gets removed, triangleIds and mesh as a version-1 delta has them. False
+   * when it does not fit (the held mesh is left as it was; a resync follows).
    */
   #decodeV2(frame) {
-    if (frame.header.version !== 2 || frame.removed !== null) return true;
     if (!this.held) return false;
     const start = this.timing && performance.now();
     try {
-      Object.assign(frame, decodeDeltaV2(frame.header, frame.body, this.held, this.grid));
+      Object.assign(frame, applyDeltaV2(frame.header, frame.body, this.held, this.grid));
     } catch (error) {
       if (error?.code !== 'bad_frame') throw error;
       frame.error = error;
@@ -298,18 +302,36 @@ export class SessionMesh {
     return changed;
   }
 
-  /** A delta re-sent known vertices with new values: rewrite the corners that use them (rare: O(n)). */
-  #rewriteVertices(changed) {
+  /**
+   * A delta gave known vertices new values (a version-2 move, or a version-1 delta re-sending
+   * them): rewrite the corners that use them. `held`, the held mesh after the delta, names those
+   * triangles in its stars; without it every corner is looked at (O(n)).
+   */
+  #rewriteVertices(changed, held) {
     const { slots } = this;
+    if (held) {
+      for (const id of changed) {
+        const row = this.vertices.rowOf.get(id);
+        held.forEachTriangleOf(id, (triangle) => this.#rewriteCorner(slots.slotOf(triangle), id, row));
+      }
+      return;
+    }
     for (let s = 0; s < slots.count; ++s) {
       for (let k = 0; k < 3; ++k) {
         const id = slots.vertexIds[3 * s + k];
-        if (!changed.has(id)) continue;
-        const { positions: p, normals: n } = this.vertices;
-        const r = 3 * this.vertices.rowOf.get(id);
-        slots.write(s, k, id, p[r], p[r + 1], p[r + 2], n[r], n[r + 1], n[r + 2]);
-        slots.touch(s);
+        if (changed.has(id)) this.#rewriteCorner(s, id, this.vertices.rowOf.get(id));
       }
     }
+  }
+
+  /** The corner of slot `s` at vertex `id` takes the values of vertex row `row`. */
+  #rewriteCorner(s, id, row) {
+    const { slots } = this;
+    const { positions: p, normals: n } = this.vertices;
+    const r = 3 * row;
+    for (let k = 0; k < 3; ++k) {
+      if (slots.vertexIds[3 * s + k] === id) slots.write(s, k, id, p[r], p[r + 1], p[r + 2], n[r], n[r + 1], n[r + 2]);
+    }
+    slots.touch(s);
   }
 }
