@@ -145,7 +145,8 @@ export class DeltaEdit {
   /**
    * What the frame changed, as decodeFrame returns a version-1 delta: the held triangles removed
    * (ascending), the triangles made and still there (ascending ids), and the vertices those use
-   * then the moved vertices still used, each once, in order of first use.
+   * then the moved vertices still used, each once, in order of first use; and `moved`, the ids of
+   * those moved vertices (their triangles keep their ids and now use the new values).
    */
   result(header) {
     const { held, created } = this;
@@ -159,7 +160,12 @@ export class DeltaEdit {
       triangleIds.push(this.base + i);
       for (let k = 0; k < 3; ++k) faces[f++] = listPoint(held, listed, held.corners[3 * t + k]);
     }
-    for (const v of this.moved) if (held.firstCorner[v] !== NONE) listPoint(held, listed, v);
+    const moved = [];
+    for (const v of this.moved) {
+      if (held.firstCorner[v] === NONE) continue;
+      listPoint(held, listed, v);
+      moved.push(held.vertexIds[v]);
+    }
     const mesh = listed.length > 0 ? { pointCount: listed.length, ...held.vertexValues(listed), faces } : null;
     for (const v of listed) held.vertexPoint[v] = NONE;
     return {
@@ -167,6 +173,7 @@ export class DeltaEdit {
       removed,
       triangleIds,
       mesh,
+      moved,
     };
   }
 

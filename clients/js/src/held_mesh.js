@@ -266,3 +266,43 @@ function grown(Type, old, length, fill = 0) {
   if (old) array.set(old);
   return array;
 }
+
+/**
+ * A HeldMesh's vertices read as a VertexTable is (SessionMesh.vertices in a version-2 session):
+ * rowOf (id -> row, iterable as a Map), positions and normals (3 per row), get, has, keys, count.
+ */
+export class HeldVertices {
+  constructor(held) {
+    this.held = held;
+  }
+
+  get rowOf() {
+    return this.held.vertexIndex;
+  }
+
+  get positions() {
+    return this.held.positions;
+  }
+
+  get normals() {
+    return this.held.normals;
+  }
+
+  get count() {
+    return this.held.vertexCount;
+  }
+
+  has(id) {
+    return this.held.vertexIndex.get(id) !== NONE;
+  }
+
+  /** {position, normal, uses} of vertex `id`, or undefined. */
+  get(id) {
+    const value = this.held.vertex(id);
+    return value && { ...value, uses: this.held.star(id).length };
+  }
+
+  keys() {
+    return this.held.vertexIndex.keys();
+  }
+}

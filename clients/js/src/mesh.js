@@ -16,7 +16,7 @@
 // unused: every payload carries all the vertices its triangles use.
 
 import { applyDeltaV2 } from './delta_v2.js';
-import { HeldMesh } from './held_mesh.js';
+import { HeldMesh, HeldVertices } from './held_mesh.js';
 import { IdIndex, NONE } from './id_index.js';
 import { TriangleSlots } from './slots.js';
 
@@ -140,7 +140,11 @@ export class SessionMesh {
    */
   constructor(options = {}) {
     this.slots = new TriangleSlots(options.initialCapacity ?? 4096);
-    this.vertices = new VertexTable((options.initialCapacity ?? 4096) / 2);
+    // The live vertices (`vertices`): this table in a version-1 session; in a version-2 session the
+    // held mesh's own (HeldVertices), which the decoder keeps up to date, so that no vertex is kept
+    // and counted twice.
+    this.table = new VertexTable((options.initialCapacity ?? 4096) / 2);
+    this.vertices = this.table;
     this.synchronized = false;
     this.sequence = -1;
     this.functionVersion = 0;
@@ -162,9 +166,9 @@ export class SessionMesh {
     const h = frame.header;
     if (h.kind === 'keyframe') {
       this.#reset();
+      this.#hold(frame);
       this.#add(frame);
       this.slots.compact();
-      this.#hold(frame);
       this.#accept(h);
       return Outcome.applied;
     }
@@ -177,16 +181,15 @@ export class SessionMesh {
     // A version-2 delta is decoded here, and applied to the held mesh as it is decoded. It needs no
     // consistency check: the decoder found every triangle it removes in the held mesh and gave
     // new ids no held triangle had, and the held mesh has the slot table's triangles.
-    const v2 = h.version === 2 && frame.removed === null;
-    if (v2 ? !this.#decodeV2(frame) : !this.#consistent(frame)) {
+    const fits = this.held ? this.#decodeV2(frame) : frame.removed !== null && this.#consistent(frame);
+    if (!fits) {
       this.synchronized = false;
       return Outcome.inconsistent;
     }
     for (const id of frame.removed) this.#removeTriangle(id);
     const changed = this.#add(frame);
     this.slots.compact();
-    if (changed.size > 0) this.#rewriteVertices(changed, v2 ? this.held : null);
-    if (!v2) this.held?.apply(frame);
+    if (changed.length > 0) this.#rewriteVertices(changed);
     this.#accept(h);
     return Outcome.applied;
   }
@@ -195,9 +198,13 @@ export class SessionMesh {
   #hold(keyframe) {
     if (keyframe.header.version !== 2) {
       this.held = this.grid = null;
+      this.vertices = this.table;
       return;
     }
-    this.held ??= new HeldMesh(this.slots.capacity);
+    if (!this.held) {
+      this.held = new HeldMesh(Math.max(this.slots.capacity, keyframe.header.triangleCount));
+      this.vertices = new HeldVertices(this.held);
+    }
     this.held.apply(keyframe);
     this.grid = keyframe.header.grid;
   }
@@ -208,7 +215,7 @@ export class SessionMesh {
    * when it does not fit (the held mesh is left as it was; a resync follows).
    */
   #decodeV2(frame) {
-    if (!this.held) return false;
+    if (frame.header.version !== 2 || frame.removed !== null) return false; // not of this session
     const start = this.timing && performance.now();
     try {
       Object.assign(frame, applyDeltaV2(frame.header, frame.body, this.held, this.grid));
@@ -261,7 +268,7 @@ export class SessionMesh {
 
   #reset() {
     this.slots.clear();
-    this.vertices.clear();
+    this.table.clear();
   }
 
   /** Every removed id is present, and every added id is absent once the removals are done. */
@@ -273,28 +280,32 @@ export class SessionMesh {
   }
 
   #removeTriangle(id) {
-    const { slots } = this;
+    const { slots, table } = this;
     const slot = slots.slotOf(id);
-    for (let k = 0; k < 3; ++k) this.vertices.release(slots.vertexIds[3 * slot + k]);
+    if (this.vertices === table) for (let k = 0; k < 3; ++k) table.release(slots.vertexIds[3 * slot + k]);
     slots.release(id);
   }
 
-  /** Adds the frame's vertices and triangles; returns the ids of live vertices whose values changed. */
+  /**
+   * Adds the frame's vertices and triangles; returns the ids of live vertices whose values changed
+   * (in a version-2 session, the moved vertices the decoder names).
+   */
   #add(frame) {
-    const changed = new Set();
     const { mesh, triangleIds } = frame;
+    const { table, slots } = this;
+    const counted = this.vertices === table;
+    const changed = counted ? [] : frame.moved ?? [];
     if (!mesh) return changed;
     const { globalIds, positions, normals, faces } = mesh;
-    const { vertices, slots } = this;
-    for (let p = 0; p < globalIds.length; ++p) {
-      if (vertices.set(globalIds[p], positions, normals, p)) changed.add(globalIds[p]);
+    if (counted) {
+      for (let p = 0; p < globalIds.length; ++p) if (table.set(globalIds[p], positions, normals, p)) changed.push(globalIds[p]);
     }
     for (let t = 0; t < triangleIds.length; ++t) {
       const slot = slots.insert(triangleIds[t]);
       for (let k = 0; k < 3; ++k) {
         const p = faces[3 * t + k];
         const id = globalIds[p];
-        vertices.use(id);
+        if (counted) table.use(id);
         slots.write(slot, k, id, positions[3 * p], positions[3 * p + 1], positions[3 * p + 2],
           normals[3 * p], normals[3 * p + 1], normals[3 * p + 2]);
       }
@@ -304,11 +315,11 @@ export class SessionMesh {
 
   /**
    * A delta gave known vertices new values (a version-2 move, or a version-1 delta re-sending
-   * them): rewrite the corners that use them. `held`, the held mesh after the delta, names those
-   * triangles in its stars; without it every corner is looked at (O(n)).
+   * them): rewrite the corners that use them. The held mesh names those triangles in its stars;
+   * without one every corner is looked at (O(n)).
    */
-  #rewriteVertices(changed, held) {
-    const { slots } = this;
+  #rewriteVertices(changed) {
+    const { slots, held } = this;
     if (held) {
       for (const id of changed) {
         const row = this.vertices.rowOf.get(id);
@@ -316,10 +327,11 @@ export class SessionMesh {
       }
       return;
     }
+    const ids = new Set(changed);
     for (let s = 0; s < slots.count; ++s) {
       for (let k = 0; k < 3; ++k) {
         const id = slots.vertexIds[3 * s + k];
-        if (changed.has(id)) this.#rewriteCorner(s, id, this.vertices.rowOf.get(id));
+        if (ids.has(id)) this.#rewriteCorner(s, id, this.vertices.rowOf.get(id));
       }
     }
   }
