@@ -15,46 +15,92 @@ export class GridMath {
 
   /** Draco's dequantization, in float: float(float(float(q) * delta) + origin). */
   dequantize(q) {
+    const out = [0, 0, 0];
+    this.dequantizeInto(q, 0, out, 0);
+    return out;
+  }
+
+  dequantizeInto(q, at, out, to) {
     const { origin } = this.grid;
-    return [0, 1, 2].map((axis) => f(f(f(q[axis]) * this.delta) + origin[axis]));
+    for (let axis = 0; axis < 3; ++axis) out[to + axis] = f(f(f(q[at + axis]) * this.delta) + origin[axis]);
   }
 
   /** The grid point of a position on the grid. */
   recover(position) {
+    const out = [0, 0, 0];
+    this.recoverInto(position, 0, out, 0);
+    return out;
+  }
+
+  recoverInto(position, at, out, to) {
     const { origin } = this.grid;
-    return [0, 1, 2].map((axis) => Math.floor((position[axis] - origin[axis]) / this.delta + 0.5));
+    for (let axis = 0; axis < 3; ++axis) out[to + axis] = Math.floor((position[at + axis] - origin[axis]) / this.delta + 0.5);
   }
 
   encodeNormal(n) {
-    const s = Math.abs(n[0]) + Math.abs(n[1]) + Math.abs(n[2]);
-    if (!(s > 0) || !Number.isFinite(s)) return [this.maxOctahedral, 0];
-    let x = n[0] / s;
-    let y = n[1] / s;
-    if (n[2] < 0) [x, y] = [(1 - Math.abs(y)) * sign(x), (1 - Math.abs(x)) * sign(y)];
+    const out = [0, 0];
+    this.encodeNormalInto(n[0], n[1], n[2], out, 0);
+    return out;
+  }
+
+  encodeNormalInto(nx, ny, nz, out, to) {
     const m = this.maxOctahedral;
-    return [Math.floor(x * m + 0.5), Math.floor(y * m + 0.5)];
+    const s = Math.abs(nx) + Math.abs(ny) + Math.abs(nz);
+    if (!(s > 0) || !Number.isFinite(s)) {
+      out[to] = m;
+      out[to + 1] = 0;
+      return;
+    }
+    let x = nx / s;
+    let y = ny / s;
+    if (nz < 0) {
+      const folded = (1 - Math.abs(y)) * sign(x);
+      y = (1 - Math.abs(x)) * sign(y);
+      x = folded;
+    }
+    out[to] = Math.floor(x * m + 0.5);
+    out[to + 1] = Math.floor(y * m + 0.5);
   }
 
   decodeNormal(code) {
+    const out = [0, 0, 0];
+    this.decodeNormalInto(code[0], code[1], out, 0);
+    return out;
+  }
+
+  decodeNormalInto(u, v, out, to) {
     const m = this.maxOctahedral;
-    let x = code[0] / m;
-    let y = code[1] / m;
+    let x = u / m;
+    let y = v / m;
     const z = 1 - Math.abs(x) - Math.abs(y);
-    if (z < 0) [x, y] = [(1 - Math.abs(y)) * sign(x), (1 - Math.abs(x)) * sign(y)];
+    if (z < 0) {
+      const folded = (1 - Math.abs(y)) * sign(x);
+      y = (1 - Math.abs(x)) * sign(y);
+      x = folded;
+    }
     const length = Math.sqrt(x * x + y * y + z * z);
-    return [f(x / length), f(y / length), f(z / length)];
+    out[to] = f(x / length);
+    out[to + 1] = f(y / length);
+    out[to + 2] = f(z / length);
   }
 
   /** The edge's midpoint bent along its ends' normals by the sagitta of a circular arc. */
   predictSplit(p, q, np, nq) {
-    let d = (p[0] - q[0]) * (np[0] - nq[0]);
-    d = d + (p[1] - q[1]) * (np[1] - nq[1]);
-    d = d + (p[2] - q[2]) * (np[2] - nq[2]);
+    const out = [0, 0, 0];
+    this.predictSplitInto(p, 0, q, 0, np, 0, nq, 0, out);
+    return out;
+  }
+
+  /** predictSplit on grid points p[pa..pa+3), q[qa..), normals np[na..), nq[nb..), into out[0..3). */
+  predictSplitInto(p, pa, q, qa, np, na, nq, nb, out) {
+    let d = (p[pa] - q[qa]) * (np[na] - nq[nb]);
+    d = d + (p[pa + 1] - q[qa + 1]) * (np[na + 1] - nq[nb + 1]);
+    d = d + (p[pa + 2] - q[qa + 2]) * (np[na + 2] - nq[nb + 2]);
     d = d / 8;
-    return [0, 1, 2].map((axis) => {
-      const twice = (p[axis] + q[axis]) + (np[axis] + nq[axis]) * d;
-      return Math.min(Math.max(Math.floor(twice * 0.5 + 0.5), 0), this.maxCoordinate);
-    });
+    for (let axis = 0; axis < 3; ++axis) {
+      const twice = (p[pa + axis] + q[qa + axis]) + (np[na + axis] + nq[nb + axis]) * d;
+      out[axis] = Math.min(Math.max(Math.floor(twice * 0.5 + 0.5), 0), this.maxCoordinate);
+    }
   }
 
   predictNormal(np, nq) {
@@ -62,11 +108,17 @@ export class GridMath {
   }
 
   validPoint(q) {
-    return q.every((c) => c >= 0 && c <= this.maxCoordinate);
+    const m = this.maxCoordinate;
+    return q[0] >= 0 && q[0] <= m && q[1] >= 0 && q[1] <= m && q[2] >= 0 && q[2] <= m;
   }
 
   validNormal(n) {
-    return n.every((c) => c >= -this.maxOctahedral && c <= this.maxOctahedral);
+    return this.validNormalCode(n[0], n[1]);
+  }
+
+  validNormalCode(u, v) {
+    const m = this.maxOctahedral;
+    return u >= -m && u <= m && v >= -m && v <= m;
   }
 }
 

@@ -98,9 +98,8 @@ export class DracoMeshDecoder {
     );
     const normals = new Float32Array(mesh.num_points() * 3);
     for (let p = 0; p < mesh.num_points(); ++p) {
-      const code = [codes[2 * p], codes[2 * p + 1]];
-      if (!octahedral.validNormal(code)) throw frameError('octahedral normal out of range');
-      normals.set(octahedral.decodeNormal(code), 3 * p);
+      if (!octahedral.validNormalCode(codes[2 * p], codes[2 * p + 1])) throw frameError('octahedral normal out of range');
+      octahedral.decodeNormalInto(codes[2 * p], codes[2 * p + 1], normals, 3 * p);
     }
     return normals;
   }

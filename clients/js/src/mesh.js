@@ -15,8 +15,9 @@
 // Vertices (VertexTable) are reference-counted by the triangles that use them and dropped when
 // unused: every payload carries all the vertices its triangles use.
 
-import { decodeDeltaV2 } from './delta_v2.js';
-import { HeldMesh } from './held_mesh.js';
+import { applyDeltaV2 } from './delta_v2.js';
+import { HeldMesh, HeldVertices } from './held_mesh.js';
+import { IdIndex, NONE } from './id_index.js';
 import { TriangleSlots } from './slots.js';
 
 export const Outcome = Object.freeze({
@@ -29,11 +30,11 @@ export const Outcome = Object.freeze({
 
 /**
  * The live vertices: global id -> a row of typed arrays (position, normal, number of triangles
- * using it). Rows of dropped vertices are reused.
+ * using it). Rows of dropped vertices are reused. rowOf (an IdIndex) iterates as a Map would.
  */
 export class VertexTable {
   constructor(capacity = 1024) {
-    this.rowOf = new Map();
+    this.rowOf = new IdIndex(capacity);
     this.free = [];
     this.size = 0; // rows ever used
     this.#allocate(Math.max(1, capacity));
@@ -44,13 +45,13 @@ export class VertexTable {
   }
 
   has(id) {
-    return this.rowOf.has(id);
+    return this.rowOf.get(id) !== NONE;
   }
 
   /** {position: [x, y, z], normal: [x, y, z], uses} of vertex `id`, or undefined. */
   get(id) {
     const row = this.rowOf.get(id);
-    if (row === undefined) return undefined;
+    if (row === NONE) return undefined;
     const p = this.positions.subarray(3 * row, 3 * row + 3);
     const n = this.normals.subarray(3 * row, 3 * row + 3);
     return { position: Array.from(p), normal: Array.from(n), uses: this.uses[row] };
@@ -67,7 +68,7 @@ export class VertexTable {
    */
   set(id, positions, normals, p) {
     let row = this.rowOf.get(id);
-    if (row === undefined) {
+    if (row === NONE) {
       row = this.free.pop() ?? this.#newRow();
       this.rowOf.set(id, row);
       this.uses[row] = 0;
@@ -133,16 +134,24 @@ export class VertexTable {
 }
 
 export class SessionMesh {
-  /** @param {{initialCapacity?: number}} [options] */
+  /**
+   * @param {{initialCapacity?: number, timing?: boolean}} [options] timing: count the time spent
+   *   decoding version-2 deltas in timing.decodeV2Ms (bench/js_apply.mjs)
+   */
   constructor(options = {}) {
     this.slots = new TriangleSlots(options.initialCapacity ?? 4096);
-    this.vertices = new VertexTable((options.initialCapacity ?? 4096) / 2);
+    // The live vertices (`vertices`): this table in a version-1 session; in a version-2 session the
+    // held mesh's own (HeldVertices), which the decoder keeps up to date, so that no vertex is kept
+    // and counted twice.
+    this.table = new VertexTable((options.initialCapacity ?? 4096) / 2);
+    this.vertices = this.table;
     this.synchronized = false;
     this.sequence = -1;
     this.functionVersion = 0;
     // Version 2 (PROTOCOL.md 4.5): the mesh as deltas name it, and the last keyframe's grid.
     this.held = null;
     this.grid = null;
+    this.timing = options.timing ? { decodeV2Ms: 0 } : null;
   }
 
   get triangleCount() {
@@ -157,9 +166,9 @@ export class SessionMesh {
     const h = frame.header;
     if (h.kind === 'keyframe') {
       this.#reset();
+      this.#hold(frame);
       this.#add(frame);
       this.slots.compact();
-      this.#hold(frame);
       this.#accept(h);
       return Outcome.applied;
     }
@@ -169,15 +178,18 @@ export class SessionMesh {
       this.synchronized = false;
       return Outcome.gap;
     }
-    if (!this.#decodeV2(frame) || !this.#consistent(frame)) {
+    // A version-2 delta is decoded here, and applied to the held mesh as it is decoded. It needs no
+    // consistency check: the decoder found every triangle it removes in the held mesh and gave
+    // new ids no held triangle had, and the held mesh has the slot table's triangles.
+    const fits = this.held ? this.#decodeV2(frame) : frame.removed !== null && this.#consistent(frame);
+    if (!fits) {
       this.synchronized = false;
       return Outcome.inconsistent;
     }
     for (const id of frame.removed) this.#removeTriangle(id);
     const changed = this.#add(frame);
     this.slots.compact();
-    if (changed.size > 0) this.#rewriteVertices(changed);
-    this.held?.apply(frame);
+    if (changed.length > 0) this.#rewriteVertices(changed);
     this.#accept(h);
     return Outcome.applied;
   }
@@ -186,27 +198,33 @@ export class SessionMesh {
   #hold(keyframe) {
     if (keyframe.header.version !== 2) {
       this.held = this.grid = null;
+      this.vertices = this.table;
       return;
     }
-    this.held ??= new HeldMesh();
+    if (!this.held) {
+      this.held = new HeldMesh(Math.max(this.slots.capacity, keyframe.header.triangleCount));
+      this.vertices = new HeldVertices(this.held);
+    }
     this.held.apply(keyframe);
     this.grid = keyframe.header.grid;
   }
 
   /**
-   * A version-2 delta (decodeFrame left it undecoded) decoded against the held mesh, in place:
-   * the frame gets removed, triangleIds and mesh as a version-1 delta has them. False when it does
-   * not fit (a resync follows).
+   * A version-2 delta (decodeFrame left it undecoded) decoded against the held mesh, which it
+   * changes: the frame gets removed, triangleIds and mesh as a version-1 delta has them. False
+   * when it does not fit (the held mesh is left as it was; a resync follows).
    */
   #decodeV2(frame) {
-    if (frame.header.version !== 2 || frame.removed !== null) return true;
-    if (!this.held) return false;
+    if (frame.header.version !== 2 || frame.removed !== null) return false; // not of this session
+    const start = this.timing && performance.now();
     try {
-      Object.assign(frame, decodeDeltaV2(frame.header, frame.body, this.held, this.grid));
+      Object.assign(frame, applyDeltaV2(frame.header, frame.body, this.held, this.grid));
     } catch (error) {
       if (error?.code !== 'bad_frame') throw error;
       frame.error = error;
       return false;
+    } finally {
+      if (this.timing) this.timing.decodeV2Ms += performance.now() - start;
     }
     return true;
   }
@@ -250,7 +268,7 @@ export class SessionMesh {
 
   #reset() {
     this.slots.clear();
-    this.vertices.clear();
+    this.table.clear();
   }
 
   /** Every removed id is present, and every added id is absent once the removals are done. */
@@ -262,28 +280,32 @@ export class SessionMesh {
   }
 
   #removeTriangle(id) {
-    const { slots } = this;
+    const { slots, table } = this;
     const slot = slots.slotOf(id);
-    for (let k = 0; k < 3; ++k) this.vertices.release(slots.vertexIds[3 * slot + k]);
+    if (this.vertices === table) for (let k = 0; k < 3; ++k) table.release(slots.vertexIds[3 * slot + k]);
     slots.release(id);
   }
 
-  /** Adds the frame's vertices and triangles; returns the ids of live vertices whose values changed. */
+  /**
+   * Adds the frame's vertices and triangles; returns the ids of live vertices whose values changed
+   * (in a version-2 session, the moved vertices the decoder names).
+   */
   #add(frame) {
-    const changed = new Set();
     const { mesh, triangleIds } = frame;
+    const { table, slots } = this;
+    const counted = this.vertices === table;
+    const changed = counted ? [] : frame.moved ?? [];
     if (!mesh) return changed;
     const { globalIds, positions, normals, faces } = mesh;
-    const { vertices, slots } = this;
-    for (let p = 0; p < globalIds.length; ++p) {
-      if (vertices.set(globalIds[p], positions, normals, p)) changed.add(globalIds[p]);
+    if (counted) {
+      for (let p = 0; p < globalIds.length; ++p) if (table.set(globalIds[p], positions, normals, p)) changed.push(globalIds[p]);
     }
     for (let t = 0; t < triangleIds.length; ++t) {
       const slot = slots.insert(triangleIds[t]);
       for (let k = 0; k < 3; ++k) {
         const p = faces[3 * t + k];
         const id = globalIds[p];
-        vertices.use(id);
+        if (counted) table.use(id);
         slots.write(slot, k, id, positions[3 * p], positions[3 * p + 1], positions[3 * p + 2],
           normals[3 * p], normals[3 * p + 1], normals[3 * p + 2]);
       }
@@ -291,18 +313,37 @@ export class SessionMesh {
     return changed;
   }
 
-  /** A delta re-sent known vertices with new values: rewrite the corners that use them (rare: O(n)). */
+  /**
+   * A delta gave known vertices new values (a version-2 move, or a version-1 delta re-sending
+   * them): rewrite the corners that use them. The held mesh names those triangles in its stars;
+   * without one every corner is looked at (O(n)).
+   */
   #rewriteVertices(changed) {
-    const { slots } = this;
+    const { slots, held } = this;
+    if (held) {
+      for (const id of changed) {
+        const row = this.vertices.rowOf.get(id);
+        held.forEachTriangleOf(id, (triangle) => this.#rewriteCorner(slots.slotOf(triangle), id, row));
+      }
+      return;
+    }
+    const ids = new Set(changed);
     for (let s = 0; s < slots.count; ++s) {
       for (let k = 0; k < 3; ++k) {
         const id = slots.vertexIds[3 * s + k];
-        if (!changed.has(id)) continue;
-        const { positions: p, normals: n } = this.vertices;
-        const r = 3 * this.vertices.rowOf.get(id);
-        slots.write(s, k, id, p[r], p[r + 1], p[r + 2], n[r], n[r + 1], n[r + 2]);
-        slots.touch(s);
+        if (ids.has(id)) this.#rewriteCorner(s, id, this.vertices.rowOf.get(id));
       }
     }
+  }
+
+  /** The corner of slot `s` at vertex `id` takes the values of vertex row `row`. */
+  #rewriteCorner(s, id, row) {
+    const { slots } = this;
+    const { positions: p, normals: n } = this.vertices;
+    const r = 3 * row;
+    for (let k = 0; k < 3; ++k) {
+      if (slots.vertexIds[3 * s + k] === id) slots.write(s, k, id, p[r], p[r + 1], p[r + 2], n[r], n[r + 1], n[r + 2]);
+    }
+    slots.touch(s);
   }
 }

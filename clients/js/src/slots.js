@@ -15,6 +15,8 @@
 // coalesced ranges to upload. Growing the arrays (doubling) replaces them: `generation` counts
 // reallocations so a renderer knows when to rebind its buffers.
 
+import { IdIndex, NONE } from './id_index.js';
+
 const FLOATS = 9; // 3 corners x 3 components
 const HOLE = -1;
 const MAX_RANGES = 32;
@@ -30,7 +32,7 @@ export class TriangleSlots {
     this.ids = new Float64Array(0); // wire ids are < 2^53: exact in a double; HOLE marks a hole
     this.end = 0; // slots [0, end) are live or holes
     this.holes = [];
-    this.slotOfId = new Map();
+    this.slotOfId = new IdIndex(initialCapacity);
     this.dirty = [];
     this.#reserve(Math.max(1, initialCapacity));
   }
@@ -41,11 +43,13 @@ export class TriangleSlots {
   }
 
   has(id) {
-    return this.slotOfId.has(id);
+    return this.slotOfId.get(id) !== NONE;
   }
 
+  /** The slot of triangle `id`, or undefined. */
   slotOf(id) {
-    return this.slotOfId.get(id);
+    const slot = this.slotOfId.get(id);
+    return slot === NONE ? undefined : slot;
   }
 
   /**
@@ -53,7 +57,7 @@ export class TriangleSlots {
    * floats and 3 vertex ids the caller then writes (see write()).
    */
   insert(id) {
-    if (this.slotOfId.has(id)) throw new Error(`triangle ${id} is already present`);
+    if (this.has(id)) throw new Error(`triangle ${id} is already present`);
     let slot = this.holes.pop();
     if (slot === undefined) {
       if (this.end === this.capacity) this.#reserve(2 * this.capacity);
@@ -85,7 +89,7 @@ export class TriangleSlots {
   /** Makes triangle `id`'s slot a hole; returns false if `id` is not present. Call compact() after. */
   release(id) {
     const slot = this.slotOfId.get(id);
-    if (slot === undefined) return false;
+    if (slot === NONE) return false;
     this.slotOfId.delete(id);
     this.ids[slot] = HOLE;
     this.holes.push(slot);

@@ -2,6 +2,7 @@ import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
 import { TriangleSlots } from '../src/slots.js';
+import { random } from './support.js';
 
 /** A triangle's data derived from its id, so that every slot can be checked against its id. */
 function fill(slots, slot, id) {
@@ -20,17 +21,6 @@ function checkContents(slots, model) {
     assert.deepEqual([...n], [0, id, 1, 1, id, 1, 2, id, 1]);
     assert.deepEqual([...slots.vertexIds.subarray(3 * s, 3 * s + 3)], [3 * id, 3 * id + 1, 3 * id + 2]);
   }
-}
-
-/** xorshift32: a deterministic sequence for the randomized tests. */
-function random(seed) {
-  let x = seed;
-  return () => {
-    x ^= x << 13;
-    x ^= x >>> 17;
-    x ^= x << 5;
-    return (x >>> 0) / 2 ** 32;
-  };
 }
 
 test('TriangleSlots: insert appends, remove swaps the last triangle into the hole', () => {

@@ -95,3 +95,14 @@ export function buildFrame({
 export function vertex(id, shift = 0) {
   return [id, id + shift, 2 * id, -id, 0, 0, 1];
 }
+
+/** xorshift32: a deterministic sequence in [0, 1) for the randomized tests. */
+export function random(seed) {
+  let x = seed;
+  return () => {
+    x ^= x << 13;
+    x ^= x >>> 17;
+    x ^= x << 5;
+    return (x >>> 0) / 2 ** 32;
+  };
+}
