@@ -371,6 +371,9 @@ void MeshSession::replace_mesh(Inbox& inbox, std::uint32_t version, bool converg
     }
     wire_version_ = version;
     last_frame_converged_ = converged;
+    // A mesh shown while phase 1 still resolves may be replaced: clients learn it at once, not a
+    // progress interval later (a phase 1 done within the interval said nothing of it).
+    progress_due_ = pipeline_->status().resolving;
     inbox.keyframes.clear();  // every subscriber just got this one
     last_flush_ = now;
 }
@@ -599,7 +602,8 @@ Message MeshSession::statistics() const {
 
 void MeshSession::send_progress(const Inbox& inbox) {
     const Clock::time_point now = Clock::now();
-    if (now - last_progress_ < services_.settings.progress_interval) return;
+    if (!progress_due_ && now - last_progress_ < services_.settings.progress_interval) return;
+    progress_due_ = false;
     auto progress = statistics<protocol::Progress>();
     progress.splits_per_second = splits_since_progress_ / seconds_between(last_progress_, now);
     progress.resolving = pipeline_->status().resolving;

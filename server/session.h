@@ -271,6 +271,8 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     RefineCounters counters_at_version_;
     std::optional<protocol::Converged> converged_message_;  // for late joiners
     std::size_t splits_since_progress_ = 0;
+    /// A keyframe shown while resolving: the next turn sends `progress` whatever the interval.
+    bool progress_due_ = false;
     bool last_frame_converged_ = false;  // the last frame sent carries the converged flag
     std::uint32_t wire_version_ = 0;     // the function version of wire_'s content
 };

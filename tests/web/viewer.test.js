@@ -461,8 +461,8 @@ test("what the server found: no surface in the box, a region that is not a surfa
 
 test('a budget below what the shape needs: "finding the shape…" while the server resolves it, then the count it needs, held and shown', async () => {
   // The gyroid on ±7 needs about 300 triangles for its topology. A new session (a new row) shows
-  // its first mesh at once while the server resolves the topology, for about a second, saying so
-  // in `progress` (an update finds the new shape aside and sends it whole). The server's messages
+  // its first mesh at once while the server resolves the topology, saying so in the `progress`
+  // that follows that keyframe (an update finds the new shape aside and sends it whole). The server's messages
   // after its first `progress` that says so wait until the row has been seen saying so: a busy
   // browser may otherwise apply the first mesh only once the topology is resolved.
   const direction = () => page.evaluate(() => {
