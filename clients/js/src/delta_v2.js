@@ -308,6 +308,7 @@ function result(header, { overlay, moved: movedIds }) {
     removed,
     triangleIds: added,
     mesh,
+    moved: movedIds, // the ids of the vertices the delta moved (PROTOCOL.md 4.5.2, step 5)
   };
 }
 
