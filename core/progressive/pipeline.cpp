@@ -92,8 +92,11 @@ PipelineStep Pipeline::step(const WorkBudget& budget) {
     // Phase 1 just ended: refine with what the step has left, so that a mesh already meeting the
     // constraint leaves flagged converged. Not in the first step, whose mesh leaves at once: one
     // operation there tells whether the constraint is met already.
-    if (refiner_ && resolving && !phase1_ && !simplifying_ && !budget.exhausted())
+    if (refiner_ && resolving && !phase1_ && !simplifying_ && !budget.exhausted()) {
         refine(out, {first ? std::size_t{1} : kAllOperations, budget});
+        // A kept moved mesh that converged makes way for the version's own mesh first.
+        if (out.converged && canonical_pending_) settle_version(out, budget);
+    }
     if (refiner_ && first) {
         out.delta = refiner_->snapshot();
         out.restarted = true;
