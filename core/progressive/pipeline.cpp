@@ -79,6 +79,8 @@ PipelineStep Pipeline::step(const WorkBudget& budget) {
     const bool resolving = phase1_ != nullptr;
     if (first) {
         first_mesh(budget);
+    } else if (refiner_->vertices_to_move() > 0) {
+        move_vertices(out, budget);
     } else if (phase1_) {
         if (refiner_->field_change_pending())
             refine(out, {kAllOperations, budget.portion(kRefreshShare)});
@@ -105,6 +107,13 @@ PipelineStep Pipeline::step(const WorkBudget& budget) {
     }
     out.cancelled = budget.cancelled();
     return out;
+}
+
+void Pipeline::move_vertices(PipelineStep& out, const WorkBudget& budget) {
+    // The moved mesh is what a viewer of a new version waits for: the vertices get the whole
+    // step, which ends once they are all moved (one operation each) so that the frame leaves at
+    // once; phase 1 of the new function and the errors' refresh follow in the next steps.
+    refine(out, {refiner_->vertices_to_move(), budget});
 }
 
 void Pipeline::refine(PipelineStep& out, const StepBudget& budget) {
@@ -368,7 +377,8 @@ void Pipeline::settle() {
 }
 
 bool Pipeline::field_change_pending() const {
-    return refiner_ && refiner_->field_change_pending();
+    // The vertices alone: the errors refreshed after them change no triangle a frame shows.
+    return refiner_ && refiner_->vertices_to_move() > 0;
 }
 
 MeshStats Pipeline::stats() const {
