@@ -501,10 +501,18 @@ void MeshSession::flush(const Inbox& inbox, bool converged) {
     if (pending_changes_ == 0 && !announce) return;
     pending_changes_ = 0;
     const MeshDelta delta = pending_.take();
-    const WireDelta content = wire_.apply(delta);
+    // Without a version-1 subscriber, the version-1 mirror follows the refiner without making a
+    // frame: re-sending every triangle around moved vertices in Draco costs tens of milliseconds
+    // a slider step, and a version-1 client that subscribes later gets a keyframe first.
+    const bool v1_wanted =
+        std::any_of(inbox.subscribers.begin(), inbox.subscribers.end(),
+                    [](const LiveSubscriber& s) { return protocol_index(s.client) == 0; });
+    std::optional<WireDelta> content;
+    if (v1_wanted) content = wire_.apply(delta);
     // A delta that changes no triangle for version 1 (which re-sends the triangles around moved
     // vertices) changes nothing a version-2 client sees either.
-    if (content.empty() && !announce) return;
+    const bool changed = content ? !content->empty() : wire_.follow(delta);
+    if (!changed && !announce) return;
     ++sequence_;
     last_frame_converged_ = converged;
     protocol::FrameInfo info;
@@ -515,17 +523,23 @@ void MeshSession::flush(const Inbox& inbox, bool converged) {
     info.timestamp_us = unix_time_us();
     info.function_version = current_.state.version;
     wire_version_ = current_.state.version;
+    flush_v2(inbox, delta, info);
+    if (content) flush_v1(inbox, *content, info);
+}
+
+void MeshSession::flush_v1(const Inbox& inbox, const WireDelta& content,
+                           const protocol::FrameInfo& info) {
+    const Clock::time_point start = Clock::now();
     protocol::DeltaContent frame_content;
     frame_content.removed = content.removed;
     frame_content.vertices = content.vertices;
     frame_content.triangles = content.triangles;
     frame_content.base_triangle_id = wire_.next_wire_id();
     auto encoded = protocol::encode_delta(info, frame_content, encoding_);
-    services_.metrics.encode_seconds.observe(seconds_between(last_flush_, Clock::now()));
+    services_.metrics.encode_seconds.observe(seconds_between(start, Clock::now()));
     if (!encoded) throw std::runtime_error("delta encoding failed: " + encoded.error().message);
     wire_.commit_wire_ids(content.refiner_ids, encoded.value().triangle_ids);
     FrameCopies frame{std::make_shared<const Bytes>(std::move(encoded.value().bytes)), nullptr};
-    flush_v2(inbox, delta, info);
     for (const LiveSubscriber& s : inbox.subscribers) {
         if (protocol_index(s.client) == 1) continue;
         if (s.client->queue().push_delta(id_for(s.access), frame_for(s.access, frame),

@@ -191,6 +191,7 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
                                                   FrameCopies& frame) const;
     /// Version-2 subscribers are there, and the version-2 mirror follows what they hold.
     bool prepare_v2(const std::vector<LiveSubscriber>& subscribers, bool replaced);
+    void flush_v1(const Inbox& inbox, const WireDelta& content, const protocol::FrameInfo& info);
     void flush_v2(const Inbox& inbox, const MeshDelta& delta, const protocol::FrameInfo& info);
     void push_keyframes(const std::vector<LiveSubscriber>& to,
                         const std::shared_ptr<const Bytes>& frame, Clock::time_point created);
