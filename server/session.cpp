@@ -303,6 +303,7 @@ MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& in
         version_frame_due_ = true;
         first_mesh_ms_ = 0;
     }
+    rest_until_ = restart_needed ? Clock::time_point{} : rest_deadline(version);
     current_ = std::move(version);
     converged_ = false;
     converged_message_.reset();
@@ -388,9 +389,26 @@ void MeshSession::limit_phase1(Clock::duration spent) {
                            {"unresolved_cells", pipeline_->status().unresolved_cells}});
 }
 
+Clock::time_point MeshSession::rest_deadline(const FunctionVersion& version) const {
+    // The value is being dragged when this version came soon after the one before.
+    const Clock::duration rest = services_.settings.rest_interval;
+    return version.requested - current_.requested < rest ? version.requested + rest
+                                                         : Clock::time_point{};
+}
+
+bool MeshSession::wait_for_rest() {
+    if (mid_change() || version_frame_due_ || Clock::now() >= rest_until_) return false;
+    services_.pool.schedule_at(shared_from_this(), rest_until_);
+    return true;
+}
+
 bool MeshSession::refine_turn(Inbox& inbox) {
-    const auto slice_us =
-        std::chrono::duration_cast<std::chrono::microseconds>(services_.settings.slice).count();
+    if (wait_for_rest()) return false;
+    // A new version's vertices on their way to its surface: the user waits for that frame, so the
+    // turn may take the first mesh's budget (the pipeline's step ends once they are all moved).
+    const Clock::duration slice =
+        mid_change() ? services_.settings.first_mesh_budget : services_.settings.slice;
+    const auto slice_us = std::chrono::duration_cast<std::chrono::microseconds>(slice).count();
     const WorkBudget budget(slice_us, WorkBudget::thread_cpu_clock(), &cancel_);
     PipelineStep step;
     {
