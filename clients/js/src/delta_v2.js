@@ -24,6 +24,7 @@ function models() {
     removedGap: intModel(),
     vertexStep: intModel(),
     movedGap: intModel(),
+    movedOffset: intModel(),
     movedPosition: intModel(),
     movedNormal: intModel(),
   };
@@ -254,14 +255,19 @@ function triangles(state) {
 function moved(state) {
   const { coder, models: m, overlay, math } = state;
   const n = count(state);
+  const maxOffset = 2 * math.maxCoordinate + 2;
   let previous = 0;
+  let offset = 0;
   for (let i = 0; i < n; ++i) {
     const id = previous + coder.uint(m.movedGap) + (i === 0 ? 0 : 1);
     if (id > MAX_VERTEX_ID) throw frameError('bad moved vertex id');
     previous = id;
     const held = overlay.vertex(id);
     if (!held) throw frameError(`moves vertex ${id}, not held`);
-    const q = math.recover(held.position);
+    // Along the held normal, by the previous moved vertex's offset plus a residual (4.5.2, 5).
+    offset += coder.sint(m.movedOffset);
+    if (Math.abs(offset) > maxOffset) throw frameError('moved vertex offset out of range');
+    const q = math.predictMove(math.recover(held.position), held.normal, offset);
     const normal = math.encodeNormal(held.normal);
     for (let axis = 0; axis < 3; ++axis) q[axis] += coder.sint(m.movedPosition);
     for (let k = 0; k < 2; ++k) normal[k] += coder.sint(m.movedNormal);

@@ -61,6 +61,14 @@ export class GridMath {
     return this.encodeNormal([np[0] + nq[0], np[1] + nq[1], np[2] + nq[2]]);
   }
 
+  /**
+   * A held vertex (grid point p, normal n) moved `steps` grid steps along its normal:
+   * p + n * steps, rounded and clamped per axis.
+   */
+  predictMove(p, n, steps) {
+    return [0, 1, 2].map((axis) => Math.min(Math.max(Math.floor(p[axis] + n[axis] * steps + 0.5), 0), this.maxCoordinate));
+  }
+
   validPoint(q) {
     return q.every((c) => c >= 0 && c <= this.maxCoordinate);
   }
