@@ -66,7 +66,7 @@ class VersionLedger {
 
   of(version) {
     if (!this.versions.has(version)) {
-      this.versions.set(version, { bytes: 0, frames: 0, texts: 0, moved: new Set(), firstFrameAt: null, firstReceivedAt: null });
+      this.versions.set(version, { bytes: 0, frames: 0, texts: 0, moved: new Set(), firstFrameAt: null, firstReceivedAt: null, applyMs: 0 });
     }
     return this.versions.get(version);
   }
@@ -89,12 +89,28 @@ class VersionLedger {
     ++entry.frames;
   }
 
+  /** The time the library took to decode and apply a frame of `version`. */
+  applyTime(version, ms) {
+    this.of(version).applyMs += ms;
+  }
+
   /** A frame the library applied. */
   applied(frame, at) {
     const entry = this.of(frame.header.functionVersion);
     entry.firstFrameAt ??= at;
     for (const id of frame.moved ?? []) entry.moved.add(id);
   }
+}
+
+/** Records the time the session's mesh takes to decode (version 2) and apply each frame. */
+function timeApplies(mesh, ledger) {
+  const apply = mesh.apply.bind(mesh);
+  mesh.apply = (frame) => {
+    const start = performance.now();
+    const outcome = apply(frame);
+    ledger.applyTime(frame.header.functionVersion, performance.now() - start);
+    return outcome;
+  };
 }
 
 const quantile = (values, q) => {
@@ -131,6 +147,7 @@ async function drag(server, name, surface, settings) {
       constraints: { triangles: settings.triangles },
     });
     for (const kind of ['keyframe', 'delta']) session.on(kind, (frame) => ledger.applied(frame, performance.now()));
+    timeApplies(session.mesh, ledger);
     await convergedAt(session, 1, 60000);
     const first = session.state.version;
     const sent = [];
@@ -168,6 +185,7 @@ function row(ledger, { version, a, at }) {
     bytes: entry.bytes,
     frames: entry.frames,
     moved: entry.moved.size,
+    applyMs: entry.applyMs,
     latency: applied === null ? null : applied - at,
     received: received === null ? null : received - at,
     own: entry.firstFrameAt !== null,
@@ -175,16 +193,17 @@ function row(ledger, { version, a, at }) {
 }
 
 function printRows(rows) {
-  const cells = ['version', 'a', 'frames', 'bytes', 'moved', 'B/moved', 'received', 'applied'];
-  const widths = [7, 7, 6, 8, 6, 7, 8, 8];
+  const cells = ['version', 'a', 'frames', 'bytes', 'moved', 'B/moved', 'received', 'applied', 'apply ms'];
+  const widths = [7, 7, 6, 8, 6, 7, 8, 8, 8];
   const line = (values) => `  ${values.map((v, i) => String(v).padStart(widths[i])).join(' ')}`;
   console.log(line(cells));
   const ms = (x, own) => (x === null ? '-' : `${x.toFixed(1)}${own ? '' : '*'}`);
   for (const r of rows) {
     const perMoved = r.moved > 0 ? (r.bytes / r.moved).toFixed(2) : '-';
-    console.log(line([r.version, r.a.toFixed(3), r.frames, r.bytes, r.moved, perMoved, ms(r.received, r.own), ms(r.latency, r.own)]));
+    console.log(line([r.version, r.a.toFixed(3), r.frames, r.bytes, r.moved, perMoved, ms(r.received, r.own), ms(r.latency, r.own), r.applyMs.toFixed(1)]));
   }
-  console.log('  (ms from sending the update; * the first frame was of a newer version: this one was superseded)');
+  console.log('  (ms from sending the update; * the first frame was of a newer version: this one was superseded;');
+  console.log('   apply ms: the time the client library took to decode and apply the version\'s frames)');
 }
 
 function report(name, ledger, sent, convergedTime, session) {
@@ -193,6 +212,7 @@ function report(name, ledger, sent, convergedTime, session) {
   const latencies = rows.filter((r) => r.latency !== null).map((r) => r.latency);
   const received = rows.filter((r) => r.received !== null).map((r) => r.received);
   const perMoved = rows.filter((r) => r.moved > 0).map((r) => r.bytes / r.moved);
+  const applyMs = rows.filter((r) => r.moved > 0).map((r) => r.applyMs);
   const total = rows.reduce((sum, r) => sum + r.bytes, 0);
   const skipped = rows.filter((r) => !r.own).length;
   const fixed = (x, digits = 1) => (x === undefined ? '-' : x.toFixed(digits));
@@ -200,6 +220,7 @@ function report(name, ledger, sent, convergedTime, session) {
     `${name.padEnd(7)} ${rows.length} updates, ${session.lastConverged.triangles} triangles: ` +
       `update to frame applied p50 ${fixed(median(latencies))} ms, p99 ${fixed(quantile(latencies, 0.99))} ms ` +
       `(received p50 ${fixed(median(received))}, p99 ${fixed(quantile(received, 0.99))}); ` +
+      `client decode and apply p50 ${fixed(median(applyMs))} ms; ` +
       `bytes per moved vertex median ${fixed(median(perMoved), 2)} ` +
       `(${perMoved.length} versions with moves, ${skipped} superseded unshown); ` +
       `total ${total} bytes; last update to converged ${convergedTime.toFixed(0)} ms`,
