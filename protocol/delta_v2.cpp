@@ -9,12 +9,14 @@
 //     normal_bits direct bits, each coordinate + its maximum);
 //   explicit triangles: count, each: 3 vertex ids, each minus the previous one (signed; the first
 //     minus 0);
-//   moved vertices: count, each: id (ascending, difference coded), position minus the held one (3
-//     signed), normal code minus the held one's (2 signed).
+//   moved vertices: count, each: id (ascending, difference coded), its offset along its held normal
+//     in grid steps minus the previous moved vertex's (signed), position minus the held one moved
+//     by that offset (3 signed), normal code minus the held one's (2 signed).
 #include "protocol/delta_v2.h"
 
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 #include <map>
 #include <optional>
 #include <string>
@@ -48,6 +50,7 @@ struct Models {
     IntModel removed_gap;
     IntModel vertex_step;
     IntModel moved_gap;
+    IntModel moved_offset;
     IntModel moved_position;
     IntModel moved_normal;
 };
@@ -100,6 +103,11 @@ class Overlay {
         for (std::uint32_t v : c) star_mut(v).push_back(id);
     }
     void set_vertex(const Vertex& v) { vertices_[v.id] = v; }
+    /// Room for `n` more vertex values (a frame that moves every vertex sets tens of thousands),
+    /// at most as many as the held mesh has.
+    void reserve_vertices(std::size_t n) {
+        vertices_.reserve(vertices_.size() + std::min(n, held_.vertex_count()));
+    }
     /// Whether triangle `id` was held or made in this frame (ids are never reused).
     bool used(std::uint64_t id) const { return created_.contains(id) || held_.triangle(id); }
 
@@ -133,6 +141,8 @@ class Overlay {
         std::sort(out.triangles.begin(), out.triangles.end(),
                   [](const FrameTriangle& a, const FrameTriangle& b) { return a.id < b.id; });
         std::unordered_set<std::uint32_t> listed;
+        listed.reserve(3 * out.triangles.size() + moved.size());
+        out.vertices.reserve(listed.bucket_count());
         auto list = [&](std::uint32_t id) {
             if (listed.insert(id).second) out.vertices.push_back(*vertex(id));
         };
@@ -166,6 +176,15 @@ class Overlay {
 };
 
 // ---- encoding ---------------------------------------------------------------------------------
+
+/// The whole grid steps along `normal` from `from` nearest to `to`: (to - from) . normal, rounded,
+/// within the bound a decoder accepts (PROTOCOL.md 4.5.2).
+std::int64_t offset_along(const GridPoint& from, const glm::vec3& normal, const GridPoint& to) {
+    double along = 0.0;
+    for (int axis = 0; axis < 3; ++axis)
+        along += static_cast<double>(to[axis] - from[axis]) * static_cast<double>(normal[axis]);
+    return static_cast<std::int64_t>(std::floor(along + 0.5));
+}
 
 /// A split as the frame says it, in final ids.
 struct PlannedSplit {
@@ -456,7 +475,9 @@ void DeltaEncoder::emit_moved() {
     std::sort(moved.begin(), moved.end(),
               [](const Vertex* a, const Vertex* b) { return a->id < b->id; });
     coder_.uint(models_.count, moved.size());
+    overlay_.reserve_vertices(moved.size());
     std::uint64_t previous = 0;
+    std::int64_t previous_offset = 0;
     for (std::size_t i = 0; i < moved.size(); ++i) {
         const Vertex& held = *overlay_.vertex(moved[i]->id);
         coder_.uint(models_.moved_gap, moved[i]->id - previous - (i == 0 ? 0 : 1));
@@ -465,9 +486,15 @@ void DeltaEncoder::emit_moved() {
         OctNormal n;
         const Vertex v = quantized(moved[i]->id, *moved[i], q, n);
         const GridPoint before = grid_.recover(held.position);
-        const OctNormal before_normal = grid_.encode_normal(glm::dvec3(held.normal));
+        // A surface that moves with a parameter moves along its normals: one offset says most of
+        // it, and neighbouring vertices (close ids) move alike.
+        const std::int64_t offset = offset_along(before, held.normal, q);
+        coder_.sint(models_.moved_offset, offset - previous_offset);
+        previous_offset = offset;
+        const GridPoint predicted = grid_.predict_move(before, held.normal, offset);
         for (int axis = 0; axis < 3; ++axis)
-            coder_.sint(models_.moved_position, q[axis] - before[axis]);
+            coder_.sint(models_.moved_position, q[axis] - predicted[axis]);
+        const OctNormal before_normal = grid_.encode_normal(glm::dvec3(held.normal));
         for (int k = 0; k < 2; ++k) coder_.sint(models_.moved_normal, n[k] - before_normal[k]);
         overlay_.set_vertex(v);
     }
@@ -661,7 +688,10 @@ std::optional<Error> DeltaDecoder::triangles() {
 std::optional<Error> DeltaDecoder::moved() {
     std::uint64_t n = 0;
     if (auto error = count(n)) return error;
+    overlay_.reserve_vertices(n);
     std::uint64_t previous = 0;
+    std::int64_t offset = 0;
+    const std::int64_t max_offset = 2 * grid_.max_coordinate() + 2;
     for (std::uint64_t i = 0; i < n; ++i) {
         const std::uint64_t id = previous + coder_.uint(models_.moved_gap) + (i == 0 ? 0 : 1);
         if (!coder_.ok() || id < previous || id > UINT32_MAX)
@@ -669,7 +699,10 @@ std::optional<Error> DeltaDecoder::moved() {
         previous = id;
         const Vertex* held = overlay_.vertex(static_cast<std::uint32_t>(id));
         if (!held) return frame_error("moves vertex " + std::to_string(id) + ", not held");
-        GridPoint q = grid_.recover(held->position);
+        offset += coder_.sint(models_.moved_offset);
+        if (!coder_.ok() || offset < -max_offset || offset > max_offset)
+            return frame_error("moved vertex offset out of range");
+        GridPoint q = grid_.predict_move(grid_.recover(held->position), held->normal, offset);
         OctNormal normal = grid_.encode_normal(glm::dvec3(held->normal));
         for (int axis = 0; axis < 3; ++axis) q[axis] += coder_.sint(models_.moved_position);
         for (int k = 0; k < 2; ++k) normal[k] += coder_.sint(models_.moved_normal);

@@ -9,7 +9,8 @@
 // their normals, and their mean normal). The client derives the removed and added triangles and
 // their ids itself. What splits do not explain (merges, a vertex the encoder cannot place) travels
 // explicitly: removed triangle ids, loose vertices, added triangles by global vertex ids. Vertices
-// that moved (a new function version) carry their new values predicted from their old ones.
+// that moved (a new function version) carry their new values predicted from their old ones moved
+// along their normals, by the distance the vertex before them moved.
 // Everything after the 56-byte header is one range-coded stream (range_coder.h).
 //
 // The encoder runs the client's decoding on its own copy of the client's mesh, so what it sends is

@@ -101,6 +101,17 @@ OctNormal GridMath::predict_normal(const glm::vec3& np, const glm::vec3& nq) con
     return encode_normal(glm::dvec3(np) + glm::dvec3(nq));
 }
 
+GridPoint GridMath::predict_move(const GridPoint& p, const glm::vec3& n, std::int64_t steps) const {
+    GridPoint out{};
+    for (int axis = 0; axis < 3; ++axis) {
+        const double moved = static_cast<double>(p[axis]) +
+                             static_cast<double>(n[axis]) * static_cast<double>(steps);
+        const double value = std::floor(moved + 0.5);
+        out[axis] = static_cast<std::int64_t>(std::clamp(value, 0.0, static_cast<double>(max_)));
+    }
+    return out;
+}
+
 bool GridMath::valid(const GridPoint& q) const {
     return std::all_of(q.begin(), q.end(), [&](std::int64_t c) { return c >= 0 && c <= max_; });
 }

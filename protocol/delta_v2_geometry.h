@@ -41,6 +41,10 @@ class GridMath {
                             const glm::vec3& nq) const;
     /// The predicted normal of that vertex: the octahedral code of np + nq.
     OctNormal predict_normal(const glm::vec3& np, const glm::vec3& nq) const;
+    /// The predicted grid point of a held vertex (grid point p, normal n) that moved `steps` grid
+    /// steps along its normal, as a surface moving with a parameter moves: p + n * steps, rounded
+    /// and clamped per axis.
+    GridPoint predict_move(const GridPoint& p, const glm::vec3& n, std::int64_t steps) const;
     bool valid(const GridPoint& q) const;
     bool valid(const OctNormal& n) const;
 

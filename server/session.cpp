@@ -303,6 +303,7 @@ MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& in
         version_frame_due_ = true;
         first_mesh_ms_ = 0;
     }
+    rest_until_ = restart_needed ? Clock::time_point{} : rest_deadline(version);
     current_ = std::move(version);
     converged_ = false;
     converged_message_.reset();
@@ -391,9 +392,26 @@ void MeshSession::limit_phase1(Clock::duration spent) {
                            {"unresolved_cells", pipeline_->status().unresolved_cells}});
 }
 
+Clock::time_point MeshSession::rest_deadline(const FunctionVersion& version) const {
+    // The value is being dragged when this version came soon after the one before.
+    const Clock::duration rest = services_.settings.rest_interval;
+    return version.requested - current_.requested < rest ? version.requested + rest
+                                                         : Clock::time_point{};
+}
+
+bool MeshSession::wait_for_rest() {
+    if (mid_change() || version_frame_due_ || Clock::now() >= rest_until_) return false;
+    services_.pool.schedule_at(shared_from_this(), rest_until_);
+    return true;
+}
+
 bool MeshSession::refine_turn(Inbox& inbox) {
-    const auto slice_us =
-        std::chrono::duration_cast<std::chrono::microseconds>(services_.settings.slice).count();
+    if (wait_for_rest()) return false;
+    // A new version's vertices on their way to its surface: the user waits for that frame, so the
+    // turn may take the first mesh's budget (the pipeline's step ends once they are all moved).
+    const Clock::duration slice =
+        mid_change() ? services_.settings.first_mesh_budget : services_.settings.slice;
+    const auto slice_us = std::chrono::duration_cast<std::chrono::microseconds>(slice).count();
     const WorkBudget budget(slice_us, WorkBudget::thread_cpu_clock(), &cancel_);
     PipelineStep step;
     {
@@ -504,10 +522,18 @@ void MeshSession::flush(const Inbox& inbox, bool converged) {
     if (pending_changes_ == 0 && !announce) return;
     pending_changes_ = 0;
     const MeshDelta delta = pending_.take();
-    const WireDelta content = wire_.apply(delta);
+    // Without a version-1 subscriber, the version-1 mirror follows the refiner without making a
+    // frame: re-sending every triangle around moved vertices in Draco costs tens of milliseconds
+    // a slider step, and a version-1 client that subscribes later gets a keyframe first.
+    const bool v1_wanted =
+        std::any_of(inbox.subscribers.begin(), inbox.subscribers.end(),
+                    [](const LiveSubscriber& s) { return protocol_index(s.client) == 0; });
+    std::optional<WireDelta> content;
+    if (v1_wanted) content = wire_.apply(delta);
     // A delta that changes no triangle for version 1 (which re-sends the triangles around moved
     // vertices) changes nothing a version-2 client sees either.
-    if (content.empty() && !announce) return;
+    const bool changed = content ? !content->empty() : wire_.follow(delta);
+    if (!changed && !announce) return;
     ++sequence_;
     last_frame_converged_ = converged;
     protocol::FrameInfo info;
@@ -518,17 +544,23 @@ void MeshSession::flush(const Inbox& inbox, bool converged) {
     info.timestamp_us = unix_time_us();
     info.function_version = current_.state.version;
     wire_version_ = current_.state.version;
+    flush_v2(inbox, delta, info);
+    if (content) flush_v1(inbox, *content, info);
+}
+
+void MeshSession::flush_v1(const Inbox& inbox, const WireDelta& content,
+                           const protocol::FrameInfo& info) {
+    const Clock::time_point start = Clock::now();
     protocol::DeltaContent frame_content;
     frame_content.removed = content.removed;
     frame_content.vertices = content.vertices;
     frame_content.triangles = content.triangles;
     frame_content.base_triangle_id = wire_.next_wire_id();
     auto encoded = protocol::encode_delta(info, frame_content, encoding_);
-    services_.metrics.encode_seconds.observe(seconds_between(last_flush_, Clock::now()));
+    services_.metrics.encode_seconds.observe(seconds_between(start, Clock::now()));
     if (!encoded) throw std::runtime_error("delta encoding failed: " + encoded.error().message);
     wire_.commit_wire_ids(content.refiner_ids, encoded.value().triangle_ids);
     FrameCopies frame{std::make_shared<const Bytes>(std::move(encoded.value().bytes)), nullptr};
-    flush_v2(inbox, delta, info);
     for (const LiveSubscriber& s : inbox.subscribers) {
         if (protocol_index(s.client) == 1) continue;
         if (s.client->queue().push_delta(id_for(s.access), frame_for(s.access, frame),

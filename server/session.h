@@ -64,6 +64,11 @@ struct SessionSettings {
     Clock::duration session_cpu = std::chrono::hours(1);  ///< CPU time over the session's life
     std::uint64_t session_memory_bytes = std::uint64_t{1280} << 20;
     Clock::duration progress_interval = std::chrono::milliseconds(250);
+    /// A slider being dragged: a version less than this after the one before gets its moved
+    /// frame at once, and the rest of its work (phase 1 again, refinement, the keyframe of its
+    /// own mesh) waits until its value has rested this long, since the next version would cancel
+    /// that work (ROAM's camera in motion). Zero: never wait.
+    Clock::duration rest_interval = std::chrono::milliseconds(100);
     int position_bits = 14;
     /// Draco's encoder speed, 0 (smallest frames) to 10 (fastest); clients do not depend on it.
     int encoding_speed = protocol::MeshEncoding{}.encoding_speed;
@@ -191,6 +196,7 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
                                                   FrameCopies& frame) const;
     /// Version-2 subscribers are there, and the version-2 mirror follows what they hold.
     bool prepare_v2(const std::vector<LiveSubscriber>& subscribers, bool replaced);
+    void flush_v1(const Inbox& inbox, const WireDelta& content, const protocol::FrameInfo& info);
     void flush_v2(const Inbox& inbox, const MeshDelta& delta, const protocol::FrameInfo& info);
     void push_keyframes(const std::vector<LiveSubscriber>& to,
                         const std::shared_ptr<const Bytes>& frame, Clock::time_point created);
@@ -204,6 +210,10 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     Start start_version(FunctionVersion version, Inbox& inbox);
     Start restart(FunctionVersion& version, Inbox& inbox);
     bool refine_turn(Inbox& inbox);
+    /// Until when the work on `version` (about to replace current_) waits for its value to rest.
+    Clock::time_point rest_deadline(const FunctionVersion& version) const;
+    /// True when the current version's work waits for its value to rest (a turn is booked then).
+    bool wait_for_rest();
     /// Sends the pipeline's whole mesh as a keyframe to every subscriber, as the next frame.
     void replace_mesh(Inbox& inbox, std::uint32_t version, bool converged);
     /// Stops phase 1 for good once it used the version's time limit.
@@ -261,6 +271,7 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     DeltaBuilder pending_;
     std::size_t pending_changes_ = 0;  // triangles and vertices changed in pending_
     bool version_frame_due_ = false;   // a new version's first frame goes out as soon as it can
+    Clock::time_point rest_until_{};   // a dragged value's work waits until then (rest_interval)
     // Incremented before each frame: unsigned wrap-around makes the first keyframe's number 0
     // (PROTOCOL.md 6.3).
     std::uint64_t sequence_ = std::numeric_limits<std::uint64_t>::max();

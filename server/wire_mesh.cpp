@@ -82,6 +82,23 @@ WireDelta WireMesh::apply(const MeshDelta& delta) {
     return content;
 }
 
+bool WireMesh::follow(const MeshDelta& delta) {
+    bool changed = !delta.removed_triangles.empty() || !delta.added_triangles.empty();
+    for (std::uint32_t id : delta.removed_triangles) triangles_.erase(id);
+    for (std::uint32_t id : delta.removed_vertices) vertices_.erase(id);
+    for (const DeltaVertex& v : delta.added_vertices)
+        vertices_[v.id] = wire_vertex(v.id, v.position, v.normal);
+    for (const DeltaTriangle& t : delta.added_triangles)
+        triangles_[t.id] = {t.vertices, next_wire_id_++};
+    for (const DeltaVertex& v : delta.moved_vertices) {
+        auto it = vertices_.find(v.id);
+        if (it == vertices_.end()) continue;  // moved, then dropped
+        it->second = wire_vertex(v.id, v.position, v.normal);
+        changed = true;
+    }
+    return changed;
+}
+
 void WireMesh::commit_wire_ids(std::span<const std::uint32_t> refiner_ids,
                                std::span<const std::uint64_t> wire_ids) {
     assert(refiner_ids.size() == wire_ids.size());

@@ -53,6 +53,13 @@ class WireMesh {
     /// Precondition: `delta` applies to this mesh (DeltaMesh::apply would succeed).
     WireDelta apply(const MeshDelta& delta);
 
+    /// Applies a refiner delta for which no version-1 frame is made (no version-1 subscriber: the
+    /// next one gets a keyframe first): added triangles get wire ids from next_wire_id() on, moved
+    /// vertices keep their triangles' ids. True when the delta changes a triangle or a vertex a
+    /// triangle uses (what a frame would show).
+    /// Precondition: `delta` applies to this mesh.
+    bool follow(const MeshDelta& delta);
+
     /// Records the wire ids the encoder gave to the triangles of the last apply() (wire_ids[i]
     /// for content.refiner_ids[i]) and advances next_wire_id() past them.
     void commit_wire_ids(std::span<const std::uint32_t> refiner_ids,

@@ -19,6 +19,30 @@ WorkerPool::~WorkerPool() {
 void WorkerPool::schedule(const std::shared_ptr<Task>& task, Lane lane) {
     std::lock_guard lock(mutex_);
     if (stopping_) return;
+    schedule_locked(task, lane);
+}
+
+void WorkerPool::schedule_at(const std::shared_ptr<Task>& task, Clock::time_point when) {
+    std::lock_guard lock(mutex_);
+    if (stopping_) return;
+    if (task->wake_at_) timers_.erase({*task->wake_at_, task});
+    task->wake_at_ = when;
+    timers_.emplace(when, task);
+    wake_.notify_one();  // a worker waiting for a later timer waits for this one instead
+}
+
+std::optional<Clock::time_point> WorkerPool::release_due(Clock::time_point now) {
+    while (!timers_.empty() && timers_.begin()->first <= now) {
+        std::shared_ptr<Task> task = timers_.begin()->second;
+        timers_.erase(timers_.begin());
+        task->wake_at_.reset();
+        schedule_locked(task, Lane::round_robin);
+    }
+    if (timers_.empty()) return std::nullopt;
+    return timers_.begin()->first;
+}
+
+void WorkerPool::schedule_locked(const std::shared_ptr<Task>& task, Lane lane) {
     const bool urgent = lane == Lane::urgent;
     switch (task->state_) {
         case Task::State::idle:
@@ -70,6 +94,8 @@ void WorkerPool::stop() {
             for (auto& task : *lane) task->state_ = Task::State::idle;
             lane->clear();
         }
+        for (const auto& [when, task] : timers_) task->wake_at_.reset();
+        timers_.clear();
     }
     wake_.notify_all();
     for (std::thread& thread : threads_) thread.join();
@@ -78,7 +104,7 @@ void WorkerPool::stop() {
 
 bool WorkerPool::wait_idle(Clock::time_point deadline) {
     std::unique_lock lock(mutex_);
-    return idle_.wait_until(lock, deadline, [this] { return nothing_queued() && running_ == 0; });
+    return idle_.wait_until(lock, deadline, [this] { return idle(); });
 }
 
 std::size_t WorkerPool::queued() const {
@@ -91,7 +117,15 @@ void WorkerPool::work() {
         std::shared_ptr<Task> task;
         {
             std::unique_lock lock(mutex_);
-            wake_.wait(lock, [this] { return stopping_ || !nothing_queued(); });
+            for (;;) {
+                const std::optional<Clock::time_point> next = release_due(Clock::now());
+                if (stopping_ || !nothing_queued()) break;
+                if (next) {
+                    wake_.wait_until(lock, *next);
+                } else {
+                    wake_.wait(lock);
+                }
+            }
             if (stopping_) return;
             task = next_task();
             task->state_ = Task::State::running;
@@ -120,7 +154,7 @@ void WorkerPool::finish_turn(const std::shared_ptr<Task>& task, bool wants_more)
     } else {
         task->state_ = Task::State::idle;
     }
-    if (nothing_queued() && running_ == 0) idle_.notify_all();
+    if (idle()) idle_.notify_all();
 }
 
 }  // namespace isomesh::server

@@ -7,6 +7,9 @@
 // keyframe for a late subscriber) is scheduled in the urgent lane, served before any round-robin
 // turn, so its latency is one turn of the busiest worker rather than a whole round over every
 // refining session. Continuation turns always go to the round-robin lane.
+//
+// A task may also ask for a turn at a later time (schedule_at): a session waiting for a dragged
+// slider to rest. Until then it costs nothing; its turn then goes to the round-robin lane.
 #pragma once
 
 #include <condition_variable>
@@ -15,7 +18,10 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <set>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "server/clock.h"
@@ -34,6 +40,7 @@ class Task {
     enum class State { idle, queued, running, running_rescheduled };
     State state_ = State::idle;  // guarded by the pool's mutex
     bool urgent_ = false;        // queued, or to be requeued, in the urgent lane; same guard
+    std::optional<Clock::time_point> wake_at_;  // its entry in the pool's timers; same guard
 };
 
 enum class Lane { round_robin, urgent };
@@ -53,8 +60,11 @@ class WorkerPool {
     /// turn (in `lane`) after the current one; when queued, it moves to the urgent lane if `lane`
     /// is urgent and otherwise stays. Thread-safe; ignored after stop().
     void schedule(const std::shared_ptr<Task>& task, Lane lane = Lane::round_robin);
+    /// Gives `task` a round-robin turn at `when` (as schedule() then), replacing a turn it asked
+    /// for this way before. Thread-safe; ignored after stop().
+    void schedule_at(const std::shared_ptr<Task>& task, Clock::time_point when);
 
-    /// Waits until no task is queued or running, or until `deadline`; true when idle.
+    /// Waits until no task is queued, running or due later, or until `deadline`; true when idle.
     bool wait_idle(Clock::time_point deadline);
 
     /// Lets running turns finish, drops queued tasks and joins the threads. Idempotent.
@@ -69,14 +79,19 @@ class WorkerPool {
     void enqueue(const std::shared_ptr<Task>& task);  // in the lane of task->urgent_
     void promote(const std::shared_ptr<Task>& task);  // from the round-robin lane to urgent
     void finish_turn(const std::shared_ptr<Task>& task, bool wants_more);
+    void schedule_locked(const std::shared_ptr<Task>& task, Lane lane);
+    /// Queues the tasks whose time has come; returns when the next one is due.
+    std::optional<Clock::time_point> release_due(Clock::time_point now);
     bool nothing_queued() const { return urgent_.empty() && queue_.empty(); }
+    bool idle() const { return nothing_queued() && running_ == 0 && timers_.empty(); }
 
     mutable std::mutex mutex_;
     std::condition_variable wake_;
     std::condition_variable idle_;
     std::size_t running_ = 0;
     std::deque<std::shared_ptr<Task>> urgent_;
-    std::deque<std::shared_ptr<Task>> queue_;  // the round-robin lane
+    std::deque<std::shared_ptr<Task>> queue_;                               // the round-robin lane
+    std::set<std::pair<Clock::time_point, std::shared_ptr<Task>>> timers_;  // schedule_at
     bool stopping_ = false;
     Metrics* metrics_;
     ErrorHandler on_error_;

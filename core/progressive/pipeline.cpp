@@ -79,6 +79,8 @@ PipelineStep Pipeline::step(const WorkBudget& budget) {
     const bool resolving = phase1_ != nullptr;
     if (first) {
         first_mesh(budget);
+    } else if (refiner_->vertices_to_move() > 0) {
+        move_vertices(out, budget);
     } else if (phase1_) {
         if (refiner_->field_change_pending())
             refine(out, {kAllOperations, budget.portion(kRefreshShare)});
@@ -92,8 +94,11 @@ PipelineStep Pipeline::step(const WorkBudget& budget) {
     // Phase 1 just ended: refine with what the step has left, so that a mesh already meeting the
     // constraint leaves flagged converged. Not in the first step, whose mesh leaves at once: one
     // operation there tells whether the constraint is met already.
-    if (refiner_ && resolving && !phase1_ && !simplifying_ && !budget.exhausted())
+    if (refiner_ && resolving && !phase1_ && !simplifying_ && !budget.exhausted()) {
         refine(out, {first ? std::size_t{1} : kAllOperations, budget});
+        // A kept moved mesh that converged makes way for the version's own mesh first.
+        if (out.converged && canonical_pending_) settle_version(out, budget);
+    }
     if (refiner_ && first) {
         out.delta = refiner_->snapshot();
         out.restarted = true;
@@ -102,6 +107,13 @@ PipelineStep Pipeline::step(const WorkBudget& budget) {
     }
     out.cancelled = budget.cancelled();
     return out;
+}
+
+void Pipeline::move_vertices(PipelineStep& out, const WorkBudget& budget) {
+    // The moved mesh is what a viewer of a new version waits for: the vertices get the whole
+    // step, which ends once they are all moved (one operation each) so that the frame leaves at
+    // once; phase 1 of the new function and the errors' refresh follow in the next steps.
+    refine(out, {refiner_->vertices_to_move(), budget});
 }
 
 void Pipeline::refine(PipelineStep& out, const StepBudget& budget) {
@@ -369,7 +381,8 @@ void Pipeline::settle() {
 }
 
 bool Pipeline::field_change_pending() const {
-    return refiner_ && refiner_->field_change_pending();
+    // The vertices alone: the errors refreshed after them change no triangle a frame shows.
+    return refiner_ && refiner_->vertices_to_move() > 0;
 }
 
 MeshStats Pipeline::stats() const {

@@ -166,6 +166,7 @@ class Pipeline {
     Mesh fit_to_budget(Mesh mesh, const WorkBudget& budget);
     bool keeps_moved_mesh(const Mesh& fresh) const;
     void refine(PipelineStep& out, const StepBudget& budget);
+    void move_vertices(PipelineStep& out, const WorkBudget& budget);
     void settle_version(PipelineStep& out, const WorkBudget& budget);
     void retire_refiner();
 

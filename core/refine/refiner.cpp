@@ -408,6 +408,9 @@ std::uint64_t Refiner::version() const {
 bool Refiner::field_change_pending() const {
     return impl_->field_change_pending();
 }
+std::size_t Refiner::vertices_to_move() const {
+    return impl_->vertices_to_move();
+}
 bool Refiner::refresh_failed() const {
     return impl_->refresh_failed();
 }

@@ -180,6 +180,11 @@ class Refiner {
     /// True from set_field until step() has moved every vertex onto the new surface and updated
     /// every error: until then the mesh mixes versions.
     bool field_change_pending() const;
+    /// After set_field, the vertices step() has yet to move onto the new surface (each is one
+    /// operation); 0 once every vertex moved. The errors are refreshed after: from then on the
+    /// mesh no longer mixes versions, but nothing is split or merged until field_change_pending()
+    /// is false.
+    std::size_t vertices_to_move() const;
     /// Since the last set_field, some vertex found no surface within its reach (it stayed where it
     /// was): the mesh does not follow the new function there.
     bool refresh_failed() const;

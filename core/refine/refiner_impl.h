@@ -168,6 +168,9 @@ class Refiner::Impl {
     const Constraint& constraint() const { return constraint_; }
     std::uint64_t version() const { return version_; }
     bool field_change_pending() const { return refresh_pending(); }
+    std::size_t vertices_to_move() const {
+        return refresh_stage_ == RefreshStage::Vertices ? refresh_list_.size() - refresh_next_ : 0;
+    }
     bool refresh_failed() const { return refresh_failed_; }
     void reset(const Mesh& first_mesh);
     const TopologyReport& root_topology() const { return root_topology_; }

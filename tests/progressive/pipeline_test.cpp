@@ -338,5 +338,22 @@ TEST(Pipeline, set_field_moves_or_replaces_and_converges_to_the_fresh_mesh) {
                            test::without_adjacency(fresh_mesh(pair(0.5), settings)));
 }
 
+// A slider's new value: the first step moves every vertex and ends there, so that the moved mesh
+// leaves at once; phase 1 of the new function and the errors' refresh come in later steps.
+TEST(Pipeline, set_field_first_step_moves_every_vertex_and_ends_there) {
+    const auto sphere = [](double a) { return test::field_of("x^2+y^2+z^2=" + std::to_string(a)); };
+    Pipeline pipeline(sphere(4.0), settings_for(cube(3), 3000));
+    step_to_convergence(pipeline, 3000);
+    const std::size_t vertices = pipeline.mesh().vertex_ids.size();
+    pipeline.set_field(sphere(4.5));
+    EXPECT_TRUE(pipeline.field_change_pending());
+    const PipelineStep moved = pipeline.step(WorkBudget{});
+    EXPECT_FALSE(pipeline.field_change_pending());
+    EXPECT_EQ(moved.delta.moved_vertices.size(), vertices);
+    EXPECT_TRUE(moved.delta.added_triangles.empty());
+    EXPECT_TRUE(pipeline.status().resolving) << "phase 1 of the new function waits";
+    EXPECT_FALSE(moved.converged);
+}
+
 }  // namespace
 }  // namespace isomesh

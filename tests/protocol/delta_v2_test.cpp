@@ -7,8 +7,10 @@
 #include <fstream>
 
 #include "protocol/delta_v2.h"
+#include "protocol/delta_v2_geometry.h"
 #include "protocol/range_coder.h"
 #include "protocol/tools/octahedron.h"
+#include "protocol/tools/sample_mesh.h"
 
 namespace isomesh::protocol {
 namespace {
@@ -127,6 +129,70 @@ TEST(DeltaV2, what_splits_do_not_explain_travels_explicitly_and_moves_apply) {
         std::ofstream(std::string(dir) + "/delta_v2_split.bin", std::ios::binary)
             .write(reinterpret_cast<const char*>(e.bytes.data()), e.bytes.size());
     }
+}
+
+/// An icosphere of `radius` held as a client decodes it on the octahedron's grid.
+HeldMesh held_sphere(float radius) {
+    const GridMath grid(samples::octahedron_grid());
+    const samples::SampleMesh sphere = samples::icosphere(4, radius);
+    DecodedFrame frame;
+    frame.header.kind = FrameKind::keyframe;
+    for (const Vertex& v : sphere.vertices) {
+        frame.vertices.push_back({v.id, grid.dequantize(grid.quantize(v.position)),
+                                  grid.decode_normal(grid.encode_normal(glm::dvec3(v.normal)))});
+    }
+    for (std::size_t t = 0; t < sphere.triangles.size(); ++t)
+        frame.triangles.push_back({t, sphere.triangles[t].vertices});
+    HeldMesh mesh;
+    mesh.apply(frame);
+    return mesh;
+}
+
+TEST(DeltaV2, moved_vertices_are_said_by_their_offset_along_the_normal) {
+    // A growing sphere (a slider on its radius): every vertex moves along its normal.
+    HeldMesh mesh = held_sphere(0.6f);
+    const samples::SampleMesh target = samples::icosphere(4, 0.65f);
+    DeltaV2Change change;
+    change.moved_vertices = target.vertices;
+    const EncodedDeltaV2 e = round_trip(mesh, change, 1'000'000, 100'000);
+    ASSERT_EQ(e.stats.moved, target.vertices.size());
+    // Each vertex lands exactly on its target's grid point, its normal on the target's code.
+    const GridMath grid(samples::octahedron_grid());
+    for (const Vertex& v : target.vertices) {
+        const Vertex* held = mesh.vertex(v.id);
+        ASSERT_TRUE(held);
+        EXPECT_EQ(grid.recover(held->position), grid.quantize(v.position));
+        EXPECT_EQ(grid.encode_normal(glm::dvec3(held->normal)),
+                  grid.encode_normal(glm::dvec3(v.normal)));
+    }
+    // The offset is the same everywhere: a few bits a vertex, where residuals per axis of about
+    // 0.05 / (2.0625 / 16383) = 400 grid steps took over 10 bits each.
+    EXPECT_LT(e.stats.moved_bits / static_cast<double>(e.stats.moved), 6.0);
+}
+
+TEST(DeltaV2, a_moved_vertex_offset_beyond_the_grid_is_refused) {
+    HeldMesh mesh = samples::octahedron();
+    const QuantizationGrid grid = samples::octahedron_grid();
+    // Hand-made body: no splits, removals, loose vertices or triangles; one moved vertex (id 0),
+    // offset 2^16 (beyond 2^(B+1) = 2^15), then zero residuals.
+    RangeEncoder coder;
+    IntModel count, gap, offset, position, normal;
+    for (int i = 0; i < 4; ++i) coder.uint(count, 0);
+    coder.uint(count, 1);
+    coder.uint(gap, 0);
+    coder.sint(offset, std::int64_t{1} << 16);
+    for (int axis = 0; axis < 3; ++axis) coder.sint(position, 0);
+    for (int k = 0; k < 2; ++k) coder.sint(normal, 0);
+    auto encoded = encode_delta_v2(delta_info(1), mesh, {}, 8, 6, grid);
+    ASSERT_TRUE(encoded.ok());
+    std::vector<std::uint8_t> bytes(encoded.value().bytes.begin(),
+                                    encoded.value().bytes.begin() + kDeltaV2HeaderBytes);
+    const std::vector<std::uint8_t> body = coder.finish();
+    bytes.insert(bytes.end(), body.begin(), body.end());
+    auto decoded = decode_delta_v2(bytes, mesh, grid);
+    ASSERT_FALSE(decoded.ok());
+    EXPECT_EQ(decoded.error().code, ErrorCode::bad_frame);
+    EXPECT_NE(decoded.error().message.find("offset"), std::string::npos) << decoded.error().message;
 }
 
 TEST(DeltaV2, a_delta_that_does_not_fit_the_held_mesh_is_refused) {

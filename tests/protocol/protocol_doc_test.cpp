@@ -72,6 +72,28 @@ TEST(ProtocolDocument, version_2_example_delta_decodes_as_described) {
     }
 }
 
+TEST(ProtocolDocument, version_2_example_move_decodes_as_described) {
+    const auto bytes = example_frame(read_document(), "example-frame-v2-move");
+    ASSERT_EQ(bytes.size(), 68u);
+    const HeldMesh octahedron = samples::octahedron();
+    auto frame = decode_delta_v2(bytes, octahedron, samples::octahedron_grid());
+    ASSERT_TRUE(frame) << frame.error().message;
+    EXPECT_TRUE(frame.value().removed.empty());
+    EXPECT_TRUE(frame.value().triangles.empty());
+    ASSERT_EQ(frame.value().vertices.size(), 6u);
+    const GridMath grid(samples::octahedron_grid());
+    for (const Vertex& v : frame.value().vertices) {
+        const Vertex& held = *octahedron.vertex(v.id);
+        // From grid point 16135 (+1) to 16373 (+1.03), or from 248 (-1) to 10 (-1.03).
+        for (int axis = 0; axis < 3; ++axis) {
+            const std::int64_t before = grid.recover(held.position)[axis];
+            const std::int64_t after = grid.recover(v.position)[axis];
+            EXPECT_EQ(after, before == 16135 ? 16373 : before == 248 ? 10 : before) << v.id;
+        }
+        EXPECT_EQ(v.normal, held.normal);
+    }
+}
+
 TEST(ProtocolDocument, header_size_matches) {
     EXPECT_NE(read_document().find("A binary frame is a 76-byte header"), std::string::npos);
     EXPECT_EQ(kFrameHeaderBytes, 76u);

@@ -193,6 +193,42 @@ TEST(WorkerPool, exceptions_are_reported_and_the_pool_keeps_working) {
     EXPECT_EQ(task->turns_run.load(), 2);
 }
 
+/// A task that records when its turns ran.
+struct TimedTask : Task {
+    bool run_slice() override {
+        std::lock_guard lock(mutex);
+        turns.push_back(Clock::now());
+        return false;
+    }
+    std::mutex mutex;
+    std::vector<Clock::time_point> turns;
+};
+
+TEST(WorkerPool, schedule_at_gives_one_turn_once_its_time_has_come) {
+    WorkerPool pool(2);
+    auto task = std::make_shared<TimedTask>();
+    const Clock::time_point when = Clock::now() + 30ms;
+    pool.schedule_at(task, when);
+    pool.schedule_at(task, when + 20ms);  // replaces the first
+    // A turn booked for later counts as work: idle only once it ran.
+    ASSERT_TRUE(pool.wait_idle(Clock::now() + 10s));
+    std::lock_guard lock(task->mutex);
+    ASSERT_EQ(task->turns.size(), 1u);
+    EXPECT_GE(task->turns[0], when + 20ms);
+}
+
+TEST(WorkerPool, stop_drops_turns_booked_for_later) {
+    auto task = std::make_shared<TimedTask>();
+    {
+        WorkerPool pool(1);
+        pool.schedule_at(task, Clock::now() + 1h);
+        pool.stop();
+        EXPECT_TRUE(pool.wait_idle(Clock::now()));
+    }
+    EXPECT_TRUE(task->turns.empty());
+    EXPECT_EQ(task.use_count(), 1);  // the pool let go of it
+}
+
 TEST(WorkerPool, metrics_count_queue_and_busy_workers) {
     Metrics metrics;
     {

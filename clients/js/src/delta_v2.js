@@ -28,6 +28,7 @@ function models() {
     removedGap: intModel(),
     vertexStep: intModel(),
     movedGap: intModel(),
+    movedOffset: intModel(),
     movedPosition: intModel(),
     movedNormal: intModel(),
   };
@@ -199,14 +200,20 @@ class BodyReader {
   moved() {
     const { coder, models: m, held, math, edit, point, normal } = this;
     const n = this.count();
+    const maxOffset = 2 * math.maxCoordinate + 2;
     let previous = 0;
+    let offset = 0;
     for (let i = 0; i < n; ++i) {
       const id = previous + coder.uint(m.movedGap) + (i === 0 ? 0 : 1);
       if (id > MAX_VERTEX_ID) throw frameError('bad moved vertex id');
       previous = id;
       const v = edit.vertexSlot(id);
       if (v === NONE) throw frameError(`moves vertex ${id}, not held`);
+      // Along the held normal, by the previous moved vertex's offset plus a residual (4.5.2, 5).
+      offset += coder.sint(m.movedOffset);
+      if (Math.abs(offset) > maxOffset) throw frameError('moved vertex offset out of range');
       math.recoverInto(held.positions, 3 * v, point, 0);
+      math.predictMoveInto(point, held.normals, 3 * v, offset);
       math.encodeNormalInto(held.normals[3 * v], held.normals[3 * v + 1], held.normals[3 * v + 2], normal, 0);
       for (let axis = 0; axis < 3; ++axis) point[axis] += coder.sint(m.movedPosition);
       for (let k = 0; k < 2; ++k) normal[k] += coder.sint(m.movedNormal);

@@ -107,6 +107,17 @@ export class GridMath {
     return this.encodeNormal([np[0] + nq[0], np[1] + nq[1], np[2] + nq[2]]);
   }
 
+  /**
+   * The grid point p moved `steps` grid steps along the normal at normals[at..at+2]:
+   * p + n * steps, rounded and clamped per axis (in place).
+   */
+  predictMoveInto(p, normals, at, steps) {
+    for (let axis = 0; axis < 3; ++axis) {
+      const moved = Math.floor(p[axis] + normals[at + axis] * steps + 0.5);
+      p[axis] = Math.min(Math.max(moved, 0), this.maxCoordinate);
+    }
+  }
+
   validPoint(q) {
     const m = this.maxCoordinate;
     return q[0] >= 0 && q[0] <= m && q[1] >= 0 && q[1] <= m && q[2] >= 0 && q[2] <= m;

@@ -32,10 +32,10 @@ function octahedron() {
   return held;
 }
 
-/** The bytes between the example-frame-v2 markers of PROTOCOL.md. */
-function exampleFrame() {
+/** The bytes between the example-frame-v2 (or `name`) markers of PROTOCOL.md. */
+function exampleFrame(name = 'example-frame-v2') {
   const doc = readFileSync(fileURLToPath(new URL('../../../protocol/PROTOCOL.md', import.meta.url)), 'utf8');
-  const block = doc.split('<!-- example-frame-v2 -->')[1].split('<!-- /example-frame-v2 -->')[0];
+  const block = doc.split(`<!-- ${name} -->`)[1].split(`<!-- /${name} -->`)[0];
   return Uint8Array.from(block.replace(/```/g, '').trim().split(/\s+/), (h) => parseInt(h, 16));
 }
 
@@ -59,6 +59,21 @@ test('decodeDeltaV2 (the worked delta of PROTOCOL.md 4.5.4)', () => {
   // Applied, the held mesh is the split octahedron: 10 triangles, 7 vertices.
   held.apply(decoded);
   assert.deepEqual([held.triangles.size, held.vertices.size], [10, 7]);
+});
+
+test('decodeDeltaV2 (the worked move of PROTOCOL.md 4.5.5)', () => {
+  const bytes = exampleFrame('example-frame-v2-move');
+  assert.equal(bytes.length, 68);
+  const frame = decodeFrame(bytes, null);
+  const decoded = decodeDeltaV2(frame.header, frame.body, octahedron(), GRID);
+  assert.deepEqual([decoded.removed, decoded.triangleIds, decoded.moved], [[], [], [0, 1, 2, 3, 4, 5]]);
+  // Every vertex from grid point 16135 (+1) to 16373 (+1.03), or from 248 (-1) to 10 (-1.03).
+  const moved = (x) => (x === 16135 ? 16373 : x === 248 ? 10 : x);
+  const before = octahedron();
+  decoded.mesh.globalIds.forEach((id, p) => {
+    const expected = math.recover(before.vertex(id).position).map(moved);
+    assert.deepEqual(math.recover(decoded.mesh.positions.subarray(3 * p, 3 * p + 3)), expected, `vertex ${id}`);
+  });
 });
 
 test('GridMath::predictSplit (the prediction of 4.5.4)', () => {

@@ -89,16 +89,18 @@ export class RangeEncoder {
 
 /**
  * A version-2 delta that only moves vertices: `moves` [{id, position: [dx, dy, dz], normal:
- * [du, dv]}] ascending by id, residuals on the grid and in normal codes (PROTOCOL.md 4.5.2 step 5).
+ * [du, dv], offset?}] ascending by id: residuals on the grid and in normal codes, and of the offset
+ * along the held normal (PROTOCOL.md 4.5.2 step 5; 0 or absent keeps the previous offset)
  */
 export function movesDelta({ sequence, baseTriangleId, baseVertexId, functionVersion = 1, moves }) {
   const coder = new RangeEncoder();
   const count = intModel();
   for (let part = 0; part < 4; ++part) coder.uint(count, 0); // no splits, removals, loose vertices, triangles
   coder.uint(count, moves.length);
-  const [gap, position, normal] = [intModel(), intModel(), intModel()];
+  const [gap, offset, position, normal] = [intModel(), intModel(), intModel(), intModel()];
   moves.forEach((move, i) => {
     coder.uint(gap, i === 0 ? move.id : move.id - moves[i - 1].id - 1);
+    coder.sint(offset, move.offset ?? 0); // the offset's residual: 0 predicts the held position (4.5.2, 5)
     for (const d of move.position) coder.sint(position, d);
     for (const d of move.normal) coder.sint(normal, d);
   });

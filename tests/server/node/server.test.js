@@ -122,6 +122,41 @@ describe('meshes', () => {
     }
   });
 
+  test('a slider drag: frames on their version\'s surface, the same mesh for every client, and the last version\'s mesh is a fresh session\'s', async () => {
+    // Updates 30 ms apart, not awaited (a user dragging a slider); a version-1 client subscribes
+    // mid-drag (its keyframe comes from the version-1 mirror, which followed without frames). The
+    // values stay within one move's reach, so the last version's vertices always move.
+    const [a, b, c, d] = await Promise.all([client(server), client(server), client(server, { protocolVersion: 1 }), client(server)]);
+    try {
+      const definition = { expression: 'x^2+y^2+z^2=a', box: BOX, constraints: { triangles: 8000 } };
+      const dragged = await a.create({ ...definition, parameters: { a: 4 } });
+      const watcher = await b.subscribe(dragged.view);
+      await Promise.all([converged(dragged), converged(watcher)]);
+      let moved = 0;
+      dragged.on('delta', (frame) => (moved += frame.moved?.length ?? 0));
+      const updates = [];
+      let late;
+      for (let i = 1; i <= 12; ++i) {
+        updates.push(dragged.update({ parameters: { a: 4 + 0.05 * i } }));
+        if (i === 4) late = await c.subscribe(dragged.id);
+        await new Promise((resolve) => setTimeout(resolve, 30));
+      }
+      await Promise.all(updates);
+      const last = dragged.state.version;
+      await Promise.all([dragged, watcher, late].map((s) => convergedAt(s, last)));
+      assert.ok(moved > 0, 'moved vertices were applied');
+      const mesh = positionTriangles(dragged.mesh);
+      assert.deepEqual(positionTriangles(watcher.mesh), mesh, 'a version-2 subscriber');
+      assert.deepEqual(positionTriangles(late.mesh), mesh, 'a version-1 subscriber from mid-drag');
+      const fresh = await d.create({ ...definition, parameters: { a: 4.6 } });
+      await converged(fresh);
+      assert.deepEqual(positionTriangles(fresh.mesh), mesh, 'a fresh session of the last version');
+      assert.equal(dragged.stats.resyncs + watcher.stats.resyncs + late.stats.resyncs, 0);
+    } finally {
+      for (const connection of [a, b, c, d]) connection.close();
+    }
+  });
+
   test('two subscribers, one of them joining late, end with identical meshes', async () => {
     const [a, b, c] = await Promise.all([client(server), client(server), client(server)]);
     try {
