@@ -81,6 +81,8 @@ PipelineStep Pipeline::step(const WorkBudget& budget) {
         first_mesh(budget);
     } else if (refiner_->vertices_to_move() > 0) {
         move_vertices(out, budget);
+    } else if (moved_mesh_failed()) {
+        replace_moved_mesh(budget);
     } else if (phase1_) {
         if (refiner_->field_change_pending())
             refine(out, {kAllOperations, budget.portion(kRefreshShare)});
@@ -114,6 +116,19 @@ void Pipeline::move_vertices(PipelineStep& out, const WorkBudget& budget) {
     // step, which ends once they are all moved (one operation each) so that the frame leaves at
     // once; phase 1 of the new function and the errors' refresh follow in the next steps.
     refine(out, {refiner_->vertices_to_move(), budget});
+}
+
+bool Pipeline::moved_mesh_failed() const {
+    return field_changing_ && refiner_->vertices_to_move() == 0 && refiner_->refresh_failed();
+}
+
+void Pipeline::replace_moved_mesh(const WorkBudget& budget) {
+    // Some vertex found no surface within its reach and stayed where it was: the moved mesh does
+    // not follow the new surface (a slider that jumped far). The new function's first mesh
+    // replaces it, made as a session's first is, in a step of its own: the move may have used up
+    // the step before, and phase 1 given no time meshes nothing (an empty surface, shown).
+    field_changing_ = false;
+    first_mesh(budget);
 }
 
 void Pipeline::refine(PipelineStep& out, const StepBudget& budget) {
@@ -181,11 +196,6 @@ void Pipeline::first_mesh(const WorkBudget& budget) {
 }
 
 void Pipeline::advance_phase1(const WorkBudget& budget) {
-    if (field_changing_ && !refiner_->field_change_pending() && refiner_->refresh_failed()) {
-        // The moved mesh does not follow the new surface: show the new phase 1's as it stands.
-        field_changing_ = false;
-        install(phase1_mesh(budget).mesh, budget);
-    }
     if (intermediate_) {
         continue_intermediate(budget);
         return;
@@ -381,8 +391,9 @@ void Pipeline::settle() {
 }
 
 bool Pipeline::field_change_pending() const {
-    // The vertices alone: the errors refreshed after them change no triangle a frame shows.
-    return refiner_ && refiner_->vertices_to_move() > 0;
+    // The vertices alone: the errors refreshed after them change no triangle a frame shows. A
+    // move that failed waits for its replacement (the next step).
+    return refiner_ && (refiner_->vertices_to_move() > 0 || moved_mesh_failed());
 }
 
 MeshStats Pipeline::stats() const {

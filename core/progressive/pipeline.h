@@ -135,8 +135,9 @@ class Pipeline {
 
     /// The first step was made: there is a mesh.
     bool started() const { return refiner_ != nullptr; }
-    /// True from set_field until every vertex moved onto the new surface: until then the mesh
-    /// mixes versions.
+    /// True from set_field until every vertex moved onto the new surface, or, where some found
+    /// no surface in reach, until the new function's first mesh replaced them: until then the
+    /// mesh mixes versions.
     bool field_change_pending() const;
     const PipelineStatus& status() const { return status_; }
     /// Precondition for the views below: started().
@@ -167,6 +168,9 @@ class Pipeline {
     bool keeps_moved_mesh(const Mesh& fresh) const;
     void refine(PipelineStep& out, const StepBudget& budget);
     void move_vertices(PipelineStep& out, const WorkBudget& budget);
+    /// Every vertex had its turn to move and some found no surface in reach.
+    bool moved_mesh_failed() const;
+    void replace_moved_mesh(const WorkBudget& budget);
     void settle_version(PipelineStep& out, const WorkBudget& budget);
     void retire_refiner();
 

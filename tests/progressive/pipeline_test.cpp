@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include <glm/geometric.hpp>
+
 #include "counting_field.h"
 #include "mesh/topology.h"
 #include "support/mesh_checks.h"
@@ -353,6 +355,23 @@ TEST(Pipeline, set_field_first_step_moves_every_vertex_and_ends_there) {
     EXPECT_TRUE(moved.delta.added_triangles.empty());
     EXPECT_TRUE(pipeline.status().resolving) << "phase 1 of the new function waits";
     EXPECT_FALSE(moved.converged);
+}
+
+TEST(Pipeline, set_field_beyond_the_vertices_reach_never_shows_them_off_the_new_surface) {
+    // A slider jumped from a = 1 to 21 (20 updates coalesced): the radius goes from 1 to 4.6, out
+    // of the moving vertices' reach. Once field_change_pending() is false (a server sends the
+    // mesh), the mesh is on the new sphere: the new function's first mesh, not the unmoved one.
+    const auto sphere = [](int a) { return test::field_of("x^2+y^2+z^2=" + std::to_string(a)); };
+    Pipeline pipeline(sphere(1), settings_for(cube(5), 6000));
+    step_to_convergence(pipeline, 6000);
+    pipeline.set_field(sphere(21));
+    for (int step = 0; step < 100 && pipeline.field_change_pending(); ++step)
+        pipeline.step(WorkBudget(2000, WorkBudget::thread_cpu_clock()));
+    ASSERT_FALSE(pipeline.field_change_pending());
+    const Mesh mesh = pipeline.mesh().mesh;
+    ASSERT_GT(mesh.triangle_count(), 0u) << "the new surface's first mesh, not an empty one";
+    for (const glm::dvec3& p : mesh.positions)
+        ASSERT_NEAR(glm::length(p), std::sqrt(21.0), 1e-2) << "a vertex off the new sphere";
 }
 
 }  // namespace
