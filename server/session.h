@@ -64,10 +64,10 @@ struct SessionSettings {
     Clock::duration session_cpu = std::chrono::hours(1);  ///< CPU time over the session's life
     std::uint64_t session_memory_bytes = std::uint64_t{1280} << 20;
     Clock::duration progress_interval = std::chrono::milliseconds(250);
-    /// A slider being dragged: a version less than this after the one before gets its moved
+    /// A slider being dragged: a new version (of the same box and error measure) gets its moved
     /// frame at once, and the rest of its work (phase 1 again, refinement, the keyframe of its
-    /// own mesh) waits until its value has rested this long, since the next version would cancel
-    /// that work (ROAM's camera in motion). Zero: never wait.
+    /// own mesh) waits until no newer version came for this long, since the next version would
+    /// cancel that work (ROAM's camera in motion). Zero: never wait.
     Clock::duration rest_interval = std::chrono::milliseconds(100);
     int position_bits = 14;
     /// Draco's encoder speed, 0 (smallest frames) to 10 (fastest); clients do not depend on it.
