@@ -67,6 +67,7 @@ test('a mouse drag of the slider moves the surface at every step the server can 
   const x = (value) => box.x + 8 + ((value + 5) / 10) * (box.width - 16); // the thumb is 16 px wide
   const y = box.y + box.height / 2;
   const steps = 30;
+  const [gpuBefore] = await page.evaluate(() => window.isomesh.geometryStats());
   await page.mouse.move(x(1), y);
   await page.mouse.down();
   for (let i = 1; i <= steps; ++i) {
@@ -74,6 +75,7 @@ test('a mouse drag of the slider moves the surface at every step the server can 
     await page.waitForTimeout(40); // a hand moves about this fast
   }
   await page.mouse.up();
+  const [gpuAfter] = await page.evaluate(() => window.isomesh.geometryStats());
   const focused = await page.evaluate(() => document.activeElement?.getAttribute('aria-label'));
   const inputs = await page.evaluate(() => window.inputEvents);
   const value = Number(await slider('a').inputValue());
@@ -83,6 +85,11 @@ test('a mouse drag of the slider moves the surface at every step the server can 
   assert.ok(inputs >= 20, `${inputs} input events from a ${steps}-step drag`);
   assert.ok(Math.abs(value - 4) < 0.25, `the thumb followed the mouse to a = ${value}`);
   assert.ok(moves >= 10, `the surface moved ${moves} times during the drag (journal: ${JSON.stringify(await page.evaluate(() => window.isomesh.journal()[0].slice(-40)))})`);
+  // The moved vertices are written into the GPU buffers in place (protocol version 2 moves): no
+  // buffer made anew while the slider moved the surface.
+  t.diagnostic(`GPU buffers during the drag: ${gpuAfter.rebinds - gpuBefore.rebinds} made anew, ${gpuAfter.rangeFloats - gpuBefore.rangeFloats} floats updated in place`);
+  assert.equal(gpuAfter.rebinds, gpuBefore.rebinds, 'no GPU buffer made anew during the drag');
+  assert.ok(gpuAfter.rangeFloats > gpuBefore.rangeFloats, 'the moves were uploaded in place');
   assert.equal(focused, 'a', 'the slider keeps the focus after the server answers');
   assert.equal(await page.getByRole('spinbutton', { name: 'Value of a' }).inputValue(), String(value));
   const png = await canvasShot(page, '2-sphere-dragged');

@@ -238,6 +238,8 @@ async function main() {
     journal: () => app.rows.map((r) => [...r.surface.journal]),
     renderedFrames: () => viewer.frames,
     longestFrameSliceMs: () => pump.longestSliceMs,
+    /** Per surface: GPU buffers made anew, and floats uploaded in place since the start. */
+    geometryStats: () => [...viewer.surfaces].map(({ slotGeometry: g }) => ({ rebinds: g.rebinds, rangeFloats: g.totalRangeFloats })),
     app,
     viewer,
     pump,

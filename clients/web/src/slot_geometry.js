@@ -19,6 +19,9 @@ export class SlotGeometry {
     this.generation = -1;
     /** Floats uploaded by the last sync (for the status line and tests). */
     this.uploadedFloats = 0;
+    /** Floats uploaded in place (update ranges) since the start, and GPU buffers made anew. */
+    this.totalRangeFloats = 0;
+    this.rebinds = 0;
   }
 
   /** Shows `slots` (a TriangleSlots) from now on. */
@@ -53,6 +56,7 @@ export class SlotGeometry {
           for (const { start, count } of ranges) {
             attribute.addUpdateRange(start * FLOATS_PER_SLOT, count * FLOATS_PER_SLOT);
             this.uploadedFloats += count * FLOATS_PER_SLOT;
+            this.totalRangeFloats += count * FLOATS_PER_SLOT;
           }
           attribute.needsUpdate = true;
         }
@@ -77,5 +81,6 @@ export class SlotGeometry {
       geometry.setAttribute(name, attribute);
     }
     this.generation = slots.generation;
+    ++this.rebinds;
   }
 }
