@@ -189,7 +189,7 @@ function slopeAlong(f, c, n, parameters, h = 1e-6) {
  *   zero_area     a triangle with a repeated vertex or no area
  *   open          an edge used by one triangle, not on the box's boundary (a hole)
  *   non_manifold  a directed edge used twice (a fold, or inconsistent orientation)
- *   reversed      a triangle facing away from f > 0 (its normal against the gradient)
+ *   reversed      a triangle facing away from f > 0 (its normal against the gradient at its centre and at two corners or more)
  *   off_surface   a vertex further than two grid steps from the surface (|f| / |grad f|)
  * The edges are checked over the whole mesh after every frame; triangles and vertices where the
  * frame added them, or all of them after a keyframe and after the first frame of a function
@@ -278,7 +278,13 @@ function checkTriangle(problems, f, parameters, ids, i, corners, c) {
   }
   if (!f) return;
   const centre = [0, 1, 2].map((k) => (corners[c + k] + corners[c + 3 + k] + corners[c + 6 + k]) / 3);
-  if (slopeAlong(f, centre, n, parameters) < 0) problems.note('reversed', `triangle at ${centre.map((x) => x.toFixed(3))}`);
+  if (slopeAlong(f, centre, n, parameters) >= 0) return;
+  // Against f's gradient at the centre and at two corners or more. The corners alone are on the
+  // surface: a coarse first mesh's triangle (7 units across in the blobby cube's box) may span a
+  // fold of f, and its centre see a gradient the surface never has there.
+  const corner = (k) => [corners[c + 3 * k], corners[c + 3 * k + 1], corners[c + 3 * k + 2]];
+  const against = [0, 1, 2].filter((k) => slopeAlong(f, corner(k), n, parameters) < 0).length;
+  if (against >= 2) problems.note('reversed', `triangle at ${centre.map((x) => x.toFixed(3))}`);
 }
 
 /** Vertex `id` at positions[p..p+3): within two grid steps of the surface. */
