@@ -5,6 +5,8 @@
 // is checked on the raw text before parsing so that no input can make the parser recurse deeply.
 #include "protocol/messages.h"
 
+#include "protocol/request_id_scanner.h"
+
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -16,36 +18,6 @@ namespace isomesh::protocol {
 namespace {
 
 using json = nlohmann::json;
-
-constexpr std::array<std::string_view, kErrorCodeCount> kErrorCodeNames = {
-    "bad_json",         "unsupported_version", "unknown_type", "bad_field",
-    "unknown_session",  "bad_expression",      "too_large",    "too_many_sessions",
-    "budget_too_large", "eval_timeout",        "unavailable",  "internal",
-    "bad_frame",        "store_unavailable",   "wrong_route",  "read_only",
-    "server_busy",      "resource_limit",
-};
-
-constexpr std::array<std::string_view, 18> kMessageTypeNames = {
-    "create", "update", "subscribe", "unsubscribe", "pause",   "resume",
-    "close",  "resync", "ping",      "created",     "updated", "subscribed",
-    "ack",    "pong",   "progress",  "converged",   "error",   "closed",
-};
-
-constexpr std::array<std::string_view, 5> kCloseReasonNames = {"closed", "expired", "shutdown",
-                                                               "error", "moved"};
-constexpr std::array<std::string_view, 3> kOutcomeNames = {"surface", "no_surface",
-                                                           "region_not_surface"};
-
-constexpr std::array<std::string_view, 2> kAccessNames = {"control", "view"};
-
-template <class Enum, std::size_t N>
-std::optional<Enum> enum_from_name(const std::array<std::string_view, N>& names,
-                                   std::string_view name) {
-    for (std::size_t i = 0; i < N; ++i) {
-        if (names[i] == name) return static_cast<Enum>(i);
-    }
-    return std::nullopt;
-}
 
 /// True when no array or object in `text` nests deeper than `max_depth`. Brackets inside strings
 /// do not count. Malformed text passes here and fails in the parser.
@@ -423,7 +395,7 @@ std::optional<SessionId> read_view(FieldReader& in) {
 std::optional<Access> read_access(FieldReader& in) {
     const auto name = in.string("access", false, 32);
     if (!name) return std::nullopt;
-    auto access = enum_from_name<Access>(kAccessNames, *name);
+    auto access = access_from_string(*name);
     if (!access) in.fail_field("access", "must be control or view");
     return access;
 }
@@ -509,7 +481,7 @@ ServerMessage read_converged(FieldReader& in) {
     m.budget_unreachable = in.boolean("budget_unreachable").value_or(false);
     if (const auto outcome = in.string("outcome", false, 32)) {
         // Unknown outcomes (a newer server) read as a surface.
-        m.outcome = enum_from_name<Outcome>(kOutcomeNames, *outcome).value_or(Outcome::surface);
+        m.outcome = outcome_from_string(*outcome).value_or(Outcome::surface);
     }
     m.splits = read_count(in, "splits");
     m.merges = read_count(in, "merges");
@@ -539,7 +511,7 @@ ServerMessage read_closed(FieldReader& in) {
     m.session = read_session(in).value_or(SessionId{});
     const auto reason = in.string("reason", true, 32);
     if (!reason) return m;
-    const auto parsed = enum_from_name<Closed::Reason>(kCloseReasonNames, *reason);
+    const auto parsed = close_reason_from_string(*reason);
     if (parsed) {
         m.reason = *parsed;
     } else {
@@ -637,62 +609,6 @@ Envelope read_envelope(std::string_view text, const ParseLimits& limits, bool fr
 
 }  // namespace
 
-std::string_view to_string(ErrorCode code) {
-    return kErrorCodeNames[static_cast<std::size_t>(code)];
-}
-
-std::optional<ErrorCode> error_code_from_string(std::string_view name) {
-    return enum_from_name<ErrorCode>(kErrorCodeNames, name);
-}
-
-std::string_view to_string(MessageType type) {
-    return kMessageTypeNames[static_cast<std::size_t>(type)];
-}
-
-std::string_view to_string(Closed::Reason reason) {
-    return kCloseReasonNames[static_cast<std::size_t>(reason)];
-}
-
-std::string_view to_string(Access access) {
-    return kAccessNames[static_cast<std::size_t>(access)];
-}
-
-std::string_view to_string(Outcome outcome) {
-    return kOutcomeNames[static_cast<std::size_t>(outcome)];
-}
-
-std::optional<MessageType> message_type_from_string(std::string_view name) {
-    return enum_from_name<MessageType>(kMessageTypeNames, name);
-}
-
-std::string SessionId::to_hex() const {
-    static constexpr char kDigits[] = "0123456789abcdef";
-    std::string hex(32, '0');
-    for (std::size_t i = 0; i < bytes.size(); ++i) {
-        hex[2 * i] = kDigits[bytes[i] >> 4];
-        hex[2 * i + 1] = kDigits[bytes[i] & 15];
-    }
-    return hex;
-}
-
-std::optional<SessionId> SessionId::from_hex(std::string_view hex) {
-    if (hex.size() != 32) return std::nullopt;
-    auto digit = [](char c) -> int {
-        if (c >= '0' && c <= '9') return c - '0';
-        if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-        if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-        return -1;
-    };
-    SessionId id;
-    for (std::size_t i = 0; i < id.bytes.size(); ++i) {
-        const int high = digit(hex[2 * i]);
-        const int low = digit(hex[2 * i + 1]);
-        if (high < 0 || low < 0) return std::nullopt;
-        id.bytes[i] = static_cast<std::uint8_t>(high * 16 + low);
-    }
-    return id;
-}
-
 Result<ClientMessage, RequestError> parse_client_message(std::string_view text,
                                                          const ParseLimits& limits, int* version) {
     Envelope e = read_envelope(text, limits, true);
@@ -727,109 +643,12 @@ ErrorReply to_reply(const RequestError& rejected) {
     return reply;
 }
 
-// ---- RequestIdScanner -------------------------------------------------------------------------
-
-namespace {
-// A request id's value is at most 64 characters: 64 escapes of 12 bytes (\uXXXX\uXXXX) at most.
-constexpr std::size_t kMaxIdValueBytes = 2 + 12 * kMaxRequestIdCharacters;
-bool json_space(char c) {
-    return c == ' ' || c == '\t' || c == '\n' || c == '\r';
-}
-}  // namespace
-
-void RequestIdScanner::feed(std::string_view text) {
-    for (char c : text) {
-        if (done_) return;
-        if (in_string_) {
-            if (depth_ == 1) capture(c);
-            if (escaped_) {
-                escaped_ = false;
-            } else if (c == '\\') {
-                escaped_ = true;
-            } else if (c == '"') {
-                in_string_ = false;
-                if (depth_ == 1) top_level(c);
-            }
-        } else if (c == '"') {
-            in_string_ = true;
-            if (depth_ == 1) top_level(c);
-        } else if (c == '{' || c == '[') {
-            if (depth_ == 1 && phase_ == Phase::before_value && key_is_id_) done_ = true;
-            if (depth_ == 1 && phase_ == Phase::before_value) phase_ = Phase::after_value;
-            ++depth_;
-        } else if (c == '}' || c == ']') {
-            if (depth_ == 1) top_level(c);
-            --depth_;
-        } else if (depth_ == 1) {
-            top_level(c);
-        }
-    }
-}
-
-/// A character outside strings at depth 1, or a quote opening or closing a string there.
-void RequestIdScanner::top_level(char c) {
-    switch (phase_) {
-        case Phase::before_key:
-            if (c == '"') phase_ = Phase::in_key, key_.clear();
-            break;
-        case Phase::in_key:  // the closing quote (the key's characters went to capture)
-            key_is_id_ = key_ == "id";
-            phase_ = Phase::after_key;
-            break;
-        case Phase::after_key:
-            if (c == ':') phase_ = Phase::before_value;
-            break;
-        case Phase::before_value:
-            if (json_space(c)) break;
-            phase_ = Phase::in_value;
-            value_is_string_ = c == '"';
-            value_.clear();
-            if (!value_is_string_) capture(c);
-            break;
-        case Phase::in_value:
-            if (value_is_string_ || c == ',' || c == '}' || json_space(c)) {
-                if (key_is_id_) done_ = true;
-                phase_ = c == ',' ? Phase::before_key : Phase::after_value;
-            } else {
-                capture(c);
-            }
-            break;
-        case Phase::after_value:
-            if (c == ',') phase_ = Phase::before_key;
-            break;
-    }
-}
-
-void RequestIdScanner::capture(char c) {
-    if (phase_ == Phase::in_key) {
-        if (c != '"' && key_.size() < 3)
-            key_ += c;
-        else if (c != '"')
-            key_ = "???";  // longer than "id"
-    } else if (phase_ == Phase::in_value && key_is_id_) {
-        if (value_.size() >= kMaxIdValueBytes) {
-            done_ = true;
-            value_.clear();
-            return;
-        }
-        value_ += c;
-    }
-}
-
-std::optional<RequestId> RequestIdScanner::id() const {
-    if (!done_ || !key_is_id_ || value_.empty()) return std::nullopt;
-    const std::string token = value_is_string_ ? "\"" + value_ : value_;
+std::optional<RequestId> parse_request_id(std::string_view token) {
     try {
         return request_id_from_json(json::parse(token));
     } catch (const json::exception&) {
         return std::nullopt;
     }
-}
-
-std::optional<RequestId> scan_request_id(std::string_view text) {
-    RequestIdScanner scanner;
-    scanner.feed(text);
-    return scanner.id();
 }
 
 std::size_t utf8_characters(std::string_view text) {

@@ -153,6 +153,7 @@ enum class Access { control, view };
 
 /// The access's name on the wire ("control", "view").
 std::string_view to_string(Access access);
+std::optional<Access> access_from_string(std::string_view name);
 
 /// The replies that describe a session: `created`, `updated`, `subscribed`. `updated` without an
 /// id also tells every other subscriber of a new version made by someone else.
@@ -263,7 +264,9 @@ struct Closed {
 
 /// The reason's name on the wire ("closed", "expired", "shutdown", "error", "moved").
 std::string_view to_string(Closed::Reason reason);
+std::optional<Closed::Reason> close_reason_from_string(std::string_view name);
 std::string_view to_string(Outcome outcome);
+std::optional<Outcome> outcome_from_string(std::string_view name);
 
 using ServerMessage =
     std::variant<Created, Updated, Subscribed, Ack, Pong, Progress, Converged, ErrorReply, Closed>;
@@ -292,32 +295,9 @@ struct RequestError {
     std::optional<RequestId> id;
 };
 
-/// Finds the top-level "id" of a request that cannot be parsed (too large, nested too deeply,
-/// malformed), fed in pieces of any size: a tolerant scan in constant memory, so that even the
-/// error about a message too large to keep echoes its id. The id is the first top-level "id"
-/// key's value when it is a valid request id.
-class RequestIdScanner {
-  public:
-    void feed(std::string_view text);
-    std::optional<RequestId> id() const;
-
-  private:
-    enum class Phase { before_key, in_key, after_key, before_value, in_value, after_value };
-    void top_level(char c);
-    void capture(char c);
-    int depth_ = 0;
-    bool in_string_ = false;
-    bool escaped_ = false;
-    Phase phase_ = Phase::before_key;
-    std::string key_;
-    std::string value_;
-    bool key_is_id_ = false;
-    bool value_is_string_ = false;
-    bool done_ = false;  // the id's value is complete, or cannot be one
-};
-
-/// RequestIdScanner over a whole text.
-std::optional<RequestId> scan_request_id(std::string_view text);
+/// A request id from its JSON text (a string or a safe integer, PROTOCOL.md 2), or nothing when
+/// the text is not a valid one.
+std::optional<RequestId> parse_request_id(std::string_view token);
 
 /// The number of characters (code points) of valid UTF-8 text.
 std::size_t utf8_characters(std::string_view text);

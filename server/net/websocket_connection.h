@@ -22,6 +22,7 @@
 #include <boost/beast/websocket.hpp>
 
 #include "protocol/messages.h"
+#include "protocol/request_id_scanner.h"
 #include "server/handshake.h"
 #include "server/mesh_service.h"
 #include "server/net/filtered_stream.h"

@@ -1,4 +1,5 @@
 #include "protocol/messages.h"
+#include "protocol/request_id_scanner.h"
 
 #include <gtest/gtest.h>
 
