@@ -1,5 +1,5 @@
 // Version-2 deltas (PROTOCOL.md 4.5.2): a 56-byte header and one range-coded body, decoded
-// against the mesh the client holds. A port of the decoder of protocol/delta_v2.cpp: splits of
+// against the mesh the client holds. A port of the decoder of protocol/delta_v2_decoder.cpp: splits of
 // held edges (new vertices predicted from the split edge), explicit removals, loose vertices,
 // explicit triangles, moved vertices. The result has the shape of decodeFrame's, so a
 // SessionMesh applies it as a version-1 delta.

@@ -1,5 +1,5 @@
 // The changes of one version-2 delta, made in place on the held mesh with a journal to undo them
-// (protocol/delta_v2.cpp works on an overlay of the held mesh instead: the same operations, each
+// (protocol/delta_v2_overlay.h works on an overlay of the held mesh instead: the same operations, each
 // seeing the previous ones). In place, every lookup is one index probe and every star walk a few
 // corners; the journal lets a delta that turns out malformed, or a decode that must leave the held
 // mesh as it was, put everything back.
