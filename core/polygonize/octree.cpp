@@ -161,11 +161,20 @@ class CellClassifier {
         if (cell.depth >= settings_.feature_depth || !may_hide_feature(enclosure))
             return CellOutcome::Unresolved;
         // A component Marching Cubes would not see: all corners on one side and an extremum of f
-        // inside. Below max_depth, in the subtree of such a cell, also the cells its surface
-        // crosses, until they are proven.
-        const bool agree = corners_agree(cell);
-        if (!agree && cell.depth == settings_.max_depth) return CellOutcome::Unresolved;
-        return !agree || extremum_inside(cell) ? CellOutcome::Split : CellOutcome::Unresolved;
+        // inside. Below max_depth, also the cells the surface crosses, until they are proven, but
+        // only under an ancestor at max_depth whose corners are on one side too (the search for
+        // a small feature). The octree goes below max_depth only there; the mesh builder's splits
+        // (split_settled) go anywhere, and where the corners at max_depth already show the surface
+        // (a CAD model's creases and blends), following it would refine the whole surface down to
+        // feature_depth, cell by cell as the grading spreads (bear.vm at depth 5: 73,075 cells at
+        // depth 8 and 5.9 s, instead of 5,613 cells and 0.28 s).
+        if (!corners_agree(cell)) {
+            return cell.depth > settings_.max_depth &&
+                           corners_agree(cell.ancestor(settings_.max_depth))
+                       ? CellOutcome::Split
+                       : CellOutcome::Unresolved;
+        }
+        return extremum_inside(cell) ? CellOutcome::Split : CellOutcome::Unresolved;
     }
 
     /// All corners of `cell` are on one side: Marching Cubes sees nothing there, so whatever
