@@ -103,6 +103,9 @@ class CellClassifier {
     }
 
     CornerCache& corners() { return corners_; }
+    /// The cells classified next are the children of one cell (until the next call): they share
+    /// the edges whose root counts edges_ keeps.
+    void begin_siblings() { edges_.clear(); }
 
   private:
     /// The siblings' enclosures in one batch, then each one's outcome; stops (returning how many
@@ -119,6 +122,7 @@ class CellClassifier {
         }
         enclosures_.resize(cells.size());
         evaluator_.interval_gradients(boxes_, enclosures_);
+        begin_siblings();
         for (std::size_t i = 0; i < cells.size(); ++i) {
             if (i > 0 && budget.exhausted()) return i;
             out[i] = outcome(cells[i], enclosures_[i]);
@@ -149,7 +153,8 @@ class CellClassifier {
         }
         const int bisections =
             std::max(settings_.max_depth, cell.depth) - cell.depth + kSubLatticeBisections;
-        switch (classify_cell(evaluator_, corners_, lattice_, cell, enclosure, bisections)) {
+        switch (
+            classify_cell(evaluator_, corners_, lattice_, cell, enclosure, bisections, &edges_)) {
             case CellVerdict::Empty:
                 return CellOutcome::Empty;
             case CellVerdict::Leaf:
@@ -228,6 +233,7 @@ class CellClassifier {
     const Lattice& lattice_;
     const OctreeSettings& settings_;
     CornerCache corners_;
+    EdgeRootCounts edges_;      // of the siblings being classified (begin_siblings)
     std::vector<CellId> path_;  // path_[k]: the pushed ancestor at depth k
     std::vector<Box> boxes_;
     std::vector<IntervalValue> values_;
@@ -380,6 +386,7 @@ void classify_subtree(Evaluator& evaluator, CellClassifier& classifier, const La
     evaluator.push(lattice.cell_box(cell));
     for (int octant = 0; octant < 8 && !budget.cancelled(); ++octant) {
         const CellId child = cell.child(octant);
+        if (octant == 0) classifier.begin_siblings();
         switch (classifier.classify_one(child)) {
             case CellOutcome::Empty:
             case CellOutcome::Region:
