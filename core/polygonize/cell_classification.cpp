@@ -34,7 +34,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 
+#include "polygonize/crossing_vertices.h"
 #include "polygonize/edge_roots.h"
 #include "polygonize/mc33.h"
 
@@ -70,25 +72,42 @@ struct EdgeSurvey {
 };
 
 EdgeSurvey survey_edges(Evaluator& evaluator, CornerCache& corners, const Lattice& lattice,
-                        const CellId& cell, int max_bisections) {
+                        const CellId& cell, int max_bisections, EdgeRootCounts* known) {
     std::array<EdgeSegment, 12> edges;
+    std::array<std::uint64_t, 12> keys;
+    std::array<std::optional<EdgeRootCount>, 12> counted;
     std::array<Box, 12> boxes;
+    std::array<int, 12> slot;
+    int fresh = 0;
     for (int e = 0; e < 12; ++e) {
         const auto [c0, c1] = kEdgeCorners[e];
         const glm::u32vec3 p0 = lattice.corner(cell, c0), p1 = lattice.corner(cell, c1);
         edges[e] = {lattice.point(p0), lattice.point(p1), corners.value(p0), corners.value(p1),
                     e / 4};
-        boxes[e] = edges[e].box();
+        keys[e] = cell_edge_key(p0, e / 4, cell.depth);
+        if (known != nullptr) {
+            const auto it = known->find(keys[e]);
+            if (it != known->end()) counted[e] = it->second;
+        }
+        if (!counted[e]) {
+            slot[e] = fresh;
+            boxes[fresh++] = edges[e].box();
+        }
     }
     // The whole edges' enclosures in one batch (the evaluator's vector kernels): most edges are
     // decided by them alone.
     std::array<IntervalGradient, 12> wholes;
-    evaluator.interval_gradients(boxes, wholes);
+    evaluator.interval_gradients(std::span(boxes).first(fresh), std::span(wholes).first(fresh));
     EdgeSurvey survey;
     for (int e = 0; e < 12; ++e) {
-        const double min_length = std::ldexp(edges[e].length(), -max_bisections);
-        const EdgeRootCount count =
-            count_edge_roots(evaluator, edges[e], min_length, 2, &wholes[e]);
+        EdgeRootCount count;
+        if (counted[e]) {
+            count = *counted[e];
+        } else {
+            const double min_length = std::ldexp(edges[e].length(), -max_bisections);
+            count = count_edge_roots(evaluator, edges[e], min_length, 2, &wholes[slot[e]]);
+            if (known != nullptr) known->emplace(keys[e], count);
+        }
         survey.roots += count.roots;
         survey.max_roots = std::max(survey.max_roots, count.roots);
         survey.false_crossing |= count.false_crossing;
@@ -147,13 +166,13 @@ unsigned monotone_axes(const Interval (&gradient)[3]) {
 }
 
 CellVerdict classify_cell(Evaluator& evaluator, CornerCache& corners, const Lattice& lattice,
-                          const CellId& cell, const IntervalGradient& enclosure,
-                          int max_bisections) {
+                          const CellId& cell, const IntervalGradient& enclosure, int max_bisections,
+                          EdgeRootCounts* edges) {
     const bool continuous =
         !enclosure.value.maybe_discontinuous && !enclosure.value.maybe_undefined;
     if (!continuous) {
         return classify_discontinuous(
-            survey_edges(evaluator, corners, lattice, cell, max_bisections));
+            survey_edges(evaluator, corners, lattice, cell, max_bisections, edges));
     }
     if (satisfies_gradient_cone(enclosure.gradient)) return CellVerdict::Leaf;
 
@@ -165,7 +184,8 @@ CellVerdict classify_cell(Evaluator& evaluator, CornerCache& corners, const Latt
         if ((monotone & ~(1u << axis)) != 0) continue;
         if (!faces_are_simple(evaluator, box, axis)) return CellVerdict::Split;
     }
-    const EdgeSurvey survey = survey_edges(evaluator, corners, lattice, cell, max_bisections);
+    const EdgeSurvey survey =
+        survey_edges(evaluator, corners, lattice, cell, max_bisections, edges);
     return survey.max_roots <= 1 ? CellVerdict::Leaf : CellVerdict::Split;
 }
 

@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "eval/evaluator.h"
+#include "polygonize/edge_roots.h"
 #include "polygonize/id_tables.h"
 #include "polygonize/lattice.h"
 
@@ -53,12 +54,18 @@ bool satisfies_gradient_cone(const Interval (&gradient)[3]);
 /// interval does not change sign and is not [0, 0].
 unsigned monotone_axes(const Interval (&gradient)[3]);
 
+/// Root counts of cell edges, by cell_edge_key (crossing_vertices.h; it holds the cell's depth,
+/// hence max_bisections): the 8 children of a cell have 54 distinct edges among their 96, whose
+/// roots are then counted once (the octree keeps one table per family).
+using EdgeRootCounts = IdMap<EdgeRootCount>;
+
 /// Decides the fate of `cell` (at or below the minimum depth), given the enclosure of f and grad f
 /// over it, whose interval of f contains 0. Evaluates corners through `corners` and edges and
-/// faces through `evaluator`; root counting halves an edge at most `max_bisections` times.
-/// See cell_classification.cpp for the rules and why they suffice.
+/// faces through `evaluator`; root counting halves an edge at most `max_bisections` times, its
+/// results read from and added to `edges` where not null. See cell_classification.cpp for the
+/// rules and why they suffice.
 CellVerdict classify_cell(Evaluator& evaluator, CornerCache& corners, const Lattice& lattice,
-                          const CellId& cell, const IntervalGradient& enclosure,
-                          int max_bisections);
+                          const CellId& cell, const IntervalGradient& enclosure, int max_bisections,
+                          EdgeRootCounts* edges = nullptr);
 
 }  // namespace isomesh

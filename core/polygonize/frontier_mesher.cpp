@@ -195,10 +195,33 @@ std::vector<FrontierCell> split_cells(EvaluatorPool& workers, const Lattice& lat
 struct CrossingRoots {
     std::vector<CrossingKey> keys;  // sorted
     std::vector<EdgeRoot> roots;
+    /// Indices of keys by group cell (root_group), in octree order: the order roots are found in.
+    std::vector<std::size_t> order;
+    std::vector<CellId> groups;  // of keys
 };
 
-/// The crossings the leaves' triangles use, their roots not found yet.
-CrossingRoots crossings_used(const std::vector<LeafMeshes>& parts) {
+/// The cells, kRootGroupLevels above the finest, whose specialised tape serves the root finding
+/// of the crossings inside them (per-cell tape simplification: a CAD model's min and max branches
+/// mostly drop out there). One push per segment cost as much as it saved; per group of about a
+/// dozen crossings it is paid once.
+constexpr int kRootGroupLevels = 2;
+
+/// The cell at `depth` holding the finest step `key` (closed boxes: a step on the upper face of
+/// the lattice is in the last cell).
+CellId root_group(const Lattice& lattice, CrossingKey key, int depth) {
+    constexpr std::uint64_t kPointBits = (std::uint64_t{1} << 51) - 1;
+    const glm::u32vec3 lower = Lattice::unkey(key & kPointBits);
+    const std::uint32_t last = (1u << depth) - 1;
+    CellId cell;
+    cell.depth = depth;
+    for (int axis = 0; axis < 3; ++axis)
+        cell.coords[axis] = std::min(last, lower[axis] / lattice.span(depth));
+    return cell;
+}
+
+/// The crossings the leaves' triangles use, their roots not found yet, ordered by group.
+CrossingRoots crossings_used(const std::vector<LeafMeshes>& parts, const Lattice& lattice,
+                             int finest_depth) {
     CrossingRoots result;
     for (const LeafMeshes& part : parts) {
         for (const auto& triangle : part.triangles) {
@@ -210,10 +233,21 @@ CrossingRoots crossings_used(const std::vector<LeafMeshes>& parts) {
     std::sort(result.keys.begin(), result.keys.end());
     result.keys.erase(std::unique(result.keys.begin(), result.keys.end()), result.keys.end());
     result.roots.resize(result.keys.size());
+    const int depth = std::max(0, finest_depth - kRootGroupLevels);
+    std::vector<std::uint64_t> group_order(result.keys.size());
+    for (std::size_t i = 0; i < result.keys.size(); ++i) {
+        result.groups.push_back(root_group(lattice, result.keys[i], depth));
+        group_order[i] = lattice.octree_order(result.groups.back());
+        result.order.push_back(i);
+    }
+    std::stable_sort(result.order.begin(), result.order.end(),
+                     [&](std::size_t a, std::size_t b) { return group_order[a] < group_order[b]; });
     return result;
 }
 
-/// Finds the roots of crossings [begin, end) of `crossings`.
+/// Finds the roots of crossings order[begin, end) of `crossings`, the evaluator specialised to
+/// each group in turn. (Specialisation does not change any evaluation's result: the roots are
+/// those of the whole tape.)
 void find_roots(EvaluatorPool& workers, const Lattice& lattice, const ValueMap& values,
                 CrossingRoots& crossings, std::size_t begin, std::size_t end,
                 const WorkBudget& budget) {
@@ -221,10 +255,18 @@ void find_roots(EvaluatorPool& workers, const Lattice& lattice, const ValueMap& 
                      [&](std::size_t task, CountingEvaluator& evaluator) {
                          const std::size_t first = begin + task * kEdgesPerTask;
                          const std::size_t last = std::min(end, first + kEdgesPerTask);
-                         for (std::size_t i = first; i < last && !budget.cancelled(); ++i) {
+                         std::optional<CellId> pushed;
+                         for (std::size_t k = first; k < last && !budget.cancelled(); ++k) {
+                             const std::size_t i = crossings.order[k];
+                             if (pushed != crossings.groups[i]) {
+                                 if (pushed) evaluator.pop();
+                                 pushed = crossings.groups[i];
+                                 evaluator.push(lattice.cell_box(*pushed));
+                             }
                              crossings.roots[i] = find_edge_root(
                                  evaluator, crossing_segment(values, lattice, crossings.keys[i]));
                          }
+                         if (pushed) evaluator.pop();
                      });
 }
 
@@ -440,7 +482,7 @@ class FrontierMesher::Impl {
             if (state.mesh) parts_.push_back(std::move(*state.mesh));
         }
         states_.clear();
-        roots_ = crossings_used(parts_);
+        roots_ = crossings_used(parts_, lattice_, finest_);
         cursor_ = 0;
         stage_ = Stage::roots;
     }
@@ -599,7 +641,7 @@ class FrontierMesher::Impl {
     std::vector<CellId> unlocated_;  // leaves whose crossings are not located yet
     Stage stage_ = Stage::corners;
     std::vector<std::size_t> candidates_;  // leaves the current selection looks at
-    std::size_t cursor_ = 0;               // in candidates_, or in roots_.keys
+    std::size_t cursor_ = 0;               // in candidates_, or in roots_.order
     std::vector<std::size_t> selected_;    // those of candidates_ seen so far that it chose
     std::vector<CellId> to_split_;
     std::size_t split_cursor_ = 0;

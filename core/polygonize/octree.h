@@ -112,9 +112,11 @@ class Octree {
 
 /// Replaces settled cell `cell` (a leaf or an unresolved cell the mesh builder must split to match
 /// finer neighbours) by the leaves of its subtree: its children, classified like any cell (so the
-/// guarantees hold for them), split further while they need it. Values of f it evaluates go to
-/// `evaluated` (those in `known` are reused). Stops early (the result is then incomplete) when
-/// the budget is cancelled. Precondition: cell.depth < kMaxOctreeDepth.
+/// guarantees hold for them), split further while they need it down to max_depth; a cell there or
+/// below that would be split is unresolved (the search for small features is the octree's).
+/// Values of f it evaluates go to `evaluated` (those in `known` are reused). Stops early (the
+/// result is then incomplete) when the budget is cancelled. Precondition: cell.depth <
+/// kMaxOctreeDepth.
 std::vector<FrontierCell> split_settled(Evaluator& evaluator, const Lattice& lattice,
                                         const OctreeSettings& settings, const CellId& cell,
                                         const ValueMap& known, ValueMap& evaluated,
