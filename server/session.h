@@ -180,6 +180,10 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     };
     enum class Start { started, superseded, failed };
 
+    /// The protocol version a subscriber's connection speaks, as an index (0: version 1, 1: 2).
+    static int protocol_index(const std::shared_ptr<Client>& client) {
+        return client->protocol_version() == 2 ? 1 : 0;
+    }
     Inbox take_inbox();
     void schedule();
     /// One turn (run_slice without the budgets around it).
