@@ -251,9 +251,10 @@ bool MeshSession::turn() {
     Inbox inbox = take_inbox();
     if (inbox.finished) return false;
     try {
+        Start started = Start::started;
         if (inbox.version) {
             last_frame_converged_ = false;  // a new version's frames start unflagged
-            const Start started = start_version(std::move(*inbox.version), inbox);
+            started = start_version(std::move(*inbox.version), inbox);
             if (started == Start::failed) return false;
             if (started == Start::superseded) {
                 // Keyframes asked for are served by a later turn (a lost request would leave a
@@ -267,6 +268,12 @@ bool MeshSession::turn() {
         if (inbox.paused || inbox.subscribers.empty() || converged_) {
             if (!mid_change()) flush(inbox, converged_);
             return false;
+        }
+        if (started == Start::restarted) {
+            // The first mesh of a new pipeline left in an urgent turn; its refinement goes on in
+            // round-robin turns, so that the next new session's first mesh does not wait for it.
+            send_progress(inbox);
+            return true;
         }
         const bool more = refine_turn(inbox);
         observe_slice(start);
@@ -289,7 +296,7 @@ MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& in
                                 version.error_measure->name() != current_.error_measure->name();
     if (restart_needed) {
         const Start started = restart(version, inbox);
-        if (started != Start::started) return started;
+        if (started != Start::restarted) return started;
     } else {
         // The vertices move onto the new surface in the next steps, while phase 1 runs again for
         // the new function (progressive/pipeline.h): nothing long happens here.
@@ -307,7 +314,7 @@ MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& in
     phase1_settled_ = false;
     last_progress_ = Clock::now();
     splits_since_progress_ = 0;
-    return Start::started;
+    return restart_needed ? Start::restarted : Start::started;
 }
 
 MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) {
@@ -347,7 +354,7 @@ MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) 
                                           {"triangles", wire_.triangle_count()},
                                           {"latency_ms", first_mesh_ms_},
                                           {"resolving", pipeline_->status().resolving}});
-    return Start::started;
+    return Start::restarted;
 }
 
 void MeshSession::limit_phase1(Clock::duration spent) {
@@ -450,7 +457,8 @@ void MeshSession::send_progress(const Inbox& inbox) {
     if (!progress_due_ && now - last_progress_ < services_.settings.progress_interval) return;
     progress_due_ = false;
     auto progress = statistics<protocol::Progress>();
-    progress.splits_per_second = splits_since_progress_ / seconds_between(last_progress_, now);
+    const double seconds = seconds_between(last_progress_, now);  // 0 right after a first mesh
+    progress.splits_per_second = seconds > 0 ? splits_since_progress_ / seconds : 0;
     progress.resolving = pipeline_->status().resolving;
     broadcast(inbox.subscribers, progress, progress.sequence, true);
     last_progress_ = now;
