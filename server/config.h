@@ -49,7 +49,7 @@ struct ServerConfig {
     std::size_t max_sessions_per_connection = 16;
     std::size_t max_connections = 1024;      ///< WebSocket connections
     std::size_t max_http_connections = 256;  ///< plain HTTP connections (oldest evicted beyond)
-    std::size_t max_sessions = 256;          ///< live sessions in total
+    std::size_t max_sessions = 1024;         ///< live sessions in total
     /// Memory (MiB) the sessions may reserve and the process may hold before new sessions are
     /// refused (server_busy); 0: half the physical memory.
     std::uint64_t max_memory_mb = 0;

@@ -46,9 +46,9 @@ protocol::SessionId random_session_id(const std::optional<Route>& route = std::n
 
 class MeshService {
   public:
-    /// Starts the worker pool and the housekeeping thread (expiry, splits per second, the
-    /// store's upkeep); reloads the sessions of an unshared `store` (none: sessions live in
-    /// memory only).
+    /// Starts the worker pool and the housekeeping thread (mesh_service_housekeeping.cpp: expiry,
+    /// splits per second, the store's upkeep); reloads the sessions of an unshared `store` (none:
+    /// sessions live in memory only).
     MeshService(const ServerConfig& config, Logger& logger, Metrics& metrics,
                 std::unique_ptr<store::SessionStore> store = nullptr);
     ~MeshService();
@@ -125,6 +125,11 @@ class MeshService {
     bool on_another_route(Request& request, const protocol::SessionId& id);
     /// A live session from `record`, or nothing after replying why not.
     std::shared_ptr<MeshSession> rebuild(Request& request, const store::SessionRecord& record);
+    /// The latest version of `record` (of session number `serial`), or why it makes none any more
+    /// (a limit lowered since): the record is then dropped.
+    VersionResult restorable_version(const store::SessionRecord& record, std::uint64_t serial);
+    /// Accounts for a session rebuilt from `record`: stores the view id it was given, if new.
+    void restored(const MeshSession& session, const store::SessionRecord& record);
     /// Registers a new session under both its ids (no subscriber yet). `creator` counts it among
     /// the sessions it created until it ends. With sessions_mutex_ held.
     std::shared_ptr<MeshSession> start_session(const SessionIds& ids, FunctionVersion version,

@@ -21,11 +21,6 @@ void gather(DeltaBuilder& batch, const MeshDelta& delta) {
     for (const DeltaTriangle& t : delta.added_triangles) batch.add_triangle(t);
 }
 
-/// The protocol version a subscriber's connection speaks, as an index (0: version 1, 1: 2).
-int protocol_index(const std::shared_ptr<Client>& client) {
-    return client->protocol_version() == 2 ? 1 : 0;
-}
-
 double milliseconds_between(Clock::time_point from, Clock::time_point to) {
     return 1000.0 * seconds_between(from, to);
 }
@@ -256,9 +251,10 @@ bool MeshSession::turn() {
     Inbox inbox = take_inbox();
     if (inbox.finished) return false;
     try {
+        Start started = Start::started;
         if (inbox.version) {
             last_frame_converged_ = false;  // a new version's frames start unflagged
-            const Start started = start_version(std::move(*inbox.version), inbox);
+            started = start_version(std::move(*inbox.version), inbox);
             if (started == Start::failed) return false;
             if (started == Start::superseded) {
                 // Keyframes asked for are served by a later turn (a lost request would leave a
@@ -272,6 +268,12 @@ bool MeshSession::turn() {
         if (inbox.paused || inbox.subscribers.empty() || converged_) {
             if (!mid_change()) flush(inbox, converged_);
             return false;
+        }
+        if (started == Start::restarted) {
+            // The first mesh of a new pipeline left in an urgent turn; its refinement goes on in
+            // round-robin turns, so that the next new session's first mesh does not wait for it.
+            send_progress(inbox);
+            return true;
         }
         const bool more = refine_turn(inbox);
         observe_slice(start);
@@ -294,7 +296,7 @@ MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& in
                                 version.error_measure->name() != current_.error_measure->name();
     if (restart_needed) {
         const Start started = restart(version, inbox);
-        if (started != Start::started) return started;
+        if (started != Start::restarted) return started;
     } else {
         // The vertices move onto the new surface in the next steps, while phase 1 runs again for
         // the new function (progressive/pipeline.h): nothing long happens here.
@@ -312,7 +314,7 @@ MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& in
     phase1_settled_ = false;
     last_progress_ = Clock::now();
     splits_since_progress_ = 0;
-    return Start::started;
+    return restart_needed ? Start::restarted : Start::started;
 }
 
 MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) {
@@ -352,31 +354,7 @@ MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) 
                                           {"triangles", wire_.triangle_count()},
                                           {"latency_ms", first_mesh_ms_},
                                           {"resolving", pipeline_->status().resolving}});
-    return Start::started;
-}
-
-void MeshSession::replace_mesh(Inbox& inbox, std::uint32_t version, bool converged) {
-    const RefinedMesh mesh = pipeline_->mesh();
-    wire_.reset(mesh.mesh, mesh.triangle_ids, mesh.vertex_ids);
-    pending_.take();
-    pending_changes_ = 0;
-    prepare_v2(inbox.subscribers, true);
-    ++sequence_;
-    const Clock::time_point now = Clock::now();
-    const std::uint16_t flags = converged ? protocol::frame_flags::converged : 0;
-    std::shared_ptr<const Bytes> frames[2];  // by protocol version, made on first use
-    for (const LiveSubscriber& s : inbox.subscribers) {
-        const int index = protocol_index(s.client);
-        if (!frames[index]) frames[index] = encode_keyframe(flags, version, index + 1);
-        push_keyframes({s}, frames[index], now);
-    }
-    wire_version_ = version;
-    last_frame_converged_ = converged;
-    // A mesh shown while phase 1 still resolves may be replaced: clients learn it at once, not a
-    // progress interval later (a phase 1 done within the interval said nothing of it).
-    progress_due_ = pipeline_->status().resolving;
-    inbox.keyframes.clear();  // every subscriber just got this one
-    last_flush_ = now;
+    return Start::restarted;
 }
 
 void MeshSession::limit_phase1(Clock::duration spent) {
@@ -458,164 +436,6 @@ bool MeshSession::refine_turn(Inbox& inbox) {
     return !converged_;
 }
 
-const std::shared_ptr<const Bytes>& MeshSession::frame_for(protocol::Access access,
-                                                           FrameCopies& frame) const {
-    if (access == protocol::Access::control) return frame.control;
-    if (!frame.view)
-        frame.view =
-            std::make_shared<const Bytes>(protocol::with_session(*frame.control, view_id_));
-    return frame.view;
-}
-
-bool MeshSession::prepare_v2(const std::vector<LiveSubscriber>& subscribers, bool replaced) {
-    const bool wanted =
-        std::any_of(subscribers.begin(), subscribers.end(),
-                    [](const LiveSubscriber& s) { return protocol_index(s.client); });
-    if (!wanted) {
-        wire_v2_.invalidate();
-    } else if (replaced || !wire_v2_.valid()) {
-        wire_v2_.reset(wire_.refiner_mesh(), encoding_.grid);
-    }
-    return wanted;
-}
-
-void MeshSession::push_keyframes(const std::vector<LiveSubscriber>& to,
-                                 const std::shared_ptr<const Bytes>& frame,
-                                 Clock::time_point created) {
-    FrameCopies copies{frame, nullptr};
-    for (const LiveSubscriber& s : to)
-        s.client->queue().push_keyframe(id_for(s.access), frame_for(s.access, copies), created);
-}
-
-void MeshSession::serve_keyframes(const std::vector<KeyframeRequest>& requests) {
-    FrameCopies frames[2][2];  // by protocol version; without and with the catch_up flag
-    const std::uint16_t converged = converged_ && wire_version_ == current_.state.version
-                                        ? protocol::frame_flags::converged
-                                        : 0;
-    for (const KeyframeRequest& request : requests) {
-        auto client = request.client.lock();
-        if (!client) continue;
-        const int index = protocol_index(client);
-        auto& frame = frames[index][request.catch_up ? 1 : 0];
-        if (!frame.control) {
-            const std::uint16_t flags =
-                converged | (request.catch_up ? protocol::frame_flags::catch_up : 0);
-            if (index == 1 && !wire_v2_.valid())
-                wire_v2_.reset(wire_.refiner_mesh(), encoding_.grid);
-            // The mirror's content: during a change of function, the version whose frames went
-            // out last (the new version's first delta then moves the vertices).
-            frame.control = encode_keyframe(flags, wire_version_, index + 1);
-        }
-        const protocol::SessionId& id = id_for(request.access);
-        if (client->queue().push_keyframe(id, frame_for(request.access, frame)) &&
-            converged_message_)
-            broadcast({{client, request.access}}, *converged_message_,
-                      converged_message_->sequence);
-    }
-}
-
-void MeshSession::flush(const Inbox& inbox, bool converged) {
-    last_flush_ = Clock::now();
-    // A convergence found after the last frame went out is announced by an empty delta flagged
-    // converged, so that the frame a `converged` message names always carries the flag.
-    const bool announce = converged && !last_frame_converged_;
-    if (pending_changes_ == 0 && !announce) return;
-    pending_changes_ = 0;
-    const MeshDelta delta = pending_.take();
-    // Without a version-1 subscriber, the version-1 mirror follows the refiner without making a
-    // frame: re-sending every triangle around moved vertices in Draco costs tens of milliseconds
-    // a slider step, and a version-1 client that subscribes later gets a keyframe first.
-    const bool v1_wanted =
-        std::any_of(inbox.subscribers.begin(), inbox.subscribers.end(),
-                    [](const LiveSubscriber& s) { return protocol_index(s.client) == 0; });
-    std::optional<WireDelta> content;
-    if (v1_wanted) content = wire_.apply(delta);
-    // A delta that changes no triangle for version 1 (which re-sends the triangles around moved
-    // vertices) changes nothing a version-2 client sees either.
-    const bool changed = content ? !content->empty() : wire_.follow(delta);
-    if (!changed && !announce) return;
-    ++sequence_;
-    last_frame_converged_ = converged;
-    protocol::FrameInfo info;
-    info.kind = protocol::FrameKind::delta;
-    info.flags = converged ? protocol::frame_flags::converged : 0;
-    info.session = id_;
-    info.sequence = sequence_;
-    info.timestamp_us = unix_time_us();
-    info.function_version = current_.state.version;
-    wire_version_ = current_.state.version;
-    flush_v2(inbox, delta, info);
-    if (content) flush_v1(inbox, *content, info);
-}
-
-void MeshSession::flush_v1(const Inbox& inbox, const WireDelta& content,
-                           const protocol::FrameInfo& info) {
-    const Clock::time_point start = Clock::now();
-    protocol::DeltaContent frame_content;
-    frame_content.removed = content.removed;
-    frame_content.vertices = content.vertices;
-    frame_content.triangles = content.triangles;
-    frame_content.base_triangle_id = wire_.next_wire_id();
-    auto encoded = protocol::encode_delta(info, frame_content, encoding_);
-    services_.metrics.encode_seconds.observe(seconds_between(start, Clock::now()));
-    if (!encoded) throw std::runtime_error("delta encoding failed: " + encoded.error().message);
-    wire_.commit_wire_ids(content.refiner_ids, encoded.value().triangle_ids);
-    FrameCopies frame{std::make_shared<const Bytes>(std::move(encoded.value().bytes)), nullptr};
-    for (const LiveSubscriber& s : inbox.subscribers) {
-        if (protocol_index(s.client) == 1) continue;
-        if (s.client->queue().push_delta(id_for(s.access), frame_for(s.access, frame),
-                                         last_flush_) == OutputQueue::DeltaOutcome::dropped_resync)
-            request_keyframe(s.client, s.access, true);
-    }
-}
-
-void MeshSession::flush_v2(const Inbox& inbox, const MeshDelta& delta,
-                           const protocol::FrameInfo& v1_info) {
-    const bool wanted =
-        std::any_of(inbox.subscribers.begin(), inbox.subscribers.end(),
-                    [](const LiveSubscriber& s) { return protocol_index(s.client); });
-    if (!wanted) wire_v2_.invalidate();
-    if (!wanted || !wire_v2_.valid()) return;  // nobody holds the version-2 mesh: keyframes next
-    protocol::FrameInfo info = v1_info;
-    info.protocol_version = 2;
-    const Clock::time_point start = Clock::now();
-    auto encoded = wire_v2_.encode(info, delta);
-    services_.metrics.encode_seconds.observe(seconds_between(start, Clock::now()));
-    if (!encoded) throw std::runtime_error("delta encoding failed: " + encoded.error().message);
-    FrameCopies frame{std::make_shared<const Bytes>(std::move(encoded.value().bytes)), nullptr};
-    for (const LiveSubscriber& s : inbox.subscribers) {
-        if (protocol_index(s.client) != 1) continue;
-        if (s.client->queue().push_delta(id_for(s.access), frame_for(s.access, frame),
-                                         last_flush_) == OutputQueue::DeltaOutcome::dropped_resync)
-            request_keyframe(s.client, s.access, true);
-    }
-}
-
-std::shared_ptr<const Bytes> MeshSession::encode_keyframe(std::uint16_t flags,
-                                                          std::uint32_t version, int protocol) {
-    const KeyframeContent content = protocol == 2 ? wire_v2_.keyframe() : wire_.keyframe();
-    protocol::FrameInfo info;
-    info.protocol_version = static_cast<std::uint8_t>(protocol);
-    info.kind = protocol::FrameKind::keyframe;
-    info.flags = flags;
-    info.session = id_;
-    info.sequence = sequence_;
-    info.timestamp_us = unix_time_us();
-    info.function_version = version;
-    const Clock::time_point start = Clock::now();
-    const bool renumber = protocol == 2 && wire_v2_.renumberable();
-    auto encoded =
-        renumber ? protocol::encode_keyframe_numbered(info, content.vertices, content.triangles,
-                                                      wire_v2_.next_triangle_id(), encoding_)
-                 : protocol::encode_keyframe(info, content.vertices, content.triangles,
-                                             content.wire_ids, encoding_);
-    services_.metrics.encode_seconds.observe(seconds_between(start, Clock::now()));
-    if (!encoded) throw std::runtime_error("keyframe encoding failed: " + encoded.error().message);
-    if (renumber) wire_v2_.renumber(content.wire_ids, encoded.value().triangle_ids);
-    if (protocol == 2) wire_v2_.sent();
-    return std::make_shared<const Bytes>(std::move(encoded.value().bytes));
-}
-
 template <class Message>
 Message MeshSession::statistics() const {
     const MeshStats stats = pipeline_->stats();
@@ -637,7 +457,8 @@ void MeshSession::send_progress(const Inbox& inbox) {
     if (!progress_due_ && now - last_progress_ < services_.settings.progress_interval) return;
     progress_due_ = false;
     auto progress = statistics<protocol::Progress>();
-    progress.splits_per_second = splits_since_progress_ / seconds_between(last_progress_, now);
+    const double seconds = seconds_between(last_progress_, now);  // 0 right after a first mesh
+    progress.splits_per_second = seconds > 0 ? splits_since_progress_ / seconds : 0;
     progress.resolving = pipeline_->status().resolving;
     broadcast(inbox.subscribers, progress, progress.sequence, true);
     last_progress_ = now;
@@ -686,6 +507,10 @@ void MeshSession::broadcast(const std::vector<LiveSubscriber>& to, Message messa
         s.client->queue().push_session_text(id_for(s.access), text, sequence, droppable);
     }
 }
+
+// serve_keyframes (session_frames.cpp) sends a late joiner the `converged` message.
+template void MeshSession::broadcast(const std::vector<LiveSubscriber>&, protocol::Converged,
+                                     std::optional<std::uint64_t>, bool);
 
 void MeshSession::fail(ErrorCode code, const std::string& message,
                        const std::optional<protocol::RequestId>& request_id) {

@@ -178,8 +178,14 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
         std::shared_ptr<const Bytes> control;
         std::shared_ptr<const Bytes> view;
     };
-    enum class Start { started, superseded, failed };
+    /// How start_version went: started (on the current pipeline), restarted (a new pipeline, its
+    /// first mesh sent), superseded (a newer version came first) or failed.
+    enum class Start { started, restarted, superseded, failed };
 
+    /// The protocol version a subscriber's connection speaks, as an index (0: version 1, 1: 2).
+    static int protocol_index(const std::shared_ptr<Client>& client) {
+        return client->protocol_version() == 2 ? 1 : 0;
+    }
     Inbox take_inbox();
     void schedule();
     /// One turn (run_slice without the budgets around it).
