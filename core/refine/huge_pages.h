@@ -1,18 +1,17 @@
 // Memory for the refiner's large arrays (triangle, vertex and record pools, queue links, delta
-// logs): transparent huge pages where the system offers them, kept for the thread's next refiner.
+// logs), backed by transparent huge pages where the system offers them.
 //
-// A refinement from scratch touches tens of megabytes of memory in random order. Fresh from the
-// kernel (the server maps every allocation over 256 kB anew: server/resources.cpp), a quarter of
-// its time went to page faults, one per 4 kB page (about 9,000 per 20,000 splits), and the rest
-// suffered TLB misses. So an array of at least 1 MB is allocated 2 MB-aligned and marked
-// MADV_HUGEPAGE (Linux; transparent_hugepage "madvise" or "always"): one fault maps 2 MB. And a
-// freed array is kept in a small per-thread cache (at most kHugePageCacheBytes) for the next
-// array of the same size, as the next refiner on that worker thread asks for: its pages are
-// already mapped. Smaller arrays use std::allocator. The contents are the same either way: only
-// where memory comes from differs.
+// A refinement from scratch touches tens of megabytes of fresh memory in random order (fresh
+// from the kernel in the server, which maps every allocation over 256 kB anew:
+// server/resources.cpp). With 4 kB pages a quarter of its time went to page faults, one per page
+// (about 9,000 per 20,000 splits), and the rest suffered TLB misses. So an array of at least 1 MB
+// is allocated 2 MB-aligned and marked MADV_HUGEPAGE (Linux; transparent_hugepage "madvise" or
+// "always"): one fault maps 2 MB. Smaller arrays use std::allocator. The contents are the same
+// either way: only where memory comes from differs.
 #pragma once
 
 #include <cstddef>
+#include <cstdlib>
 #include <memory>
 #include <new>
 #include <vector>
@@ -23,15 +22,9 @@ inline constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
 /// Arrays from this size on are rounded up to whole huge pages (at most twice their size).
 inline constexpr std::size_t kHugePageArrayBytes = kHugePageBytes / 2;
 
-/// Freed arrays the calling thread keeps for reuse, in bytes at most.
-inline constexpr std::size_t kHugePageCacheBytes = std::size_t{32} << 20;
-
-/// `bytes` (a multiple of kHugePageBytes), kHugePageBytes-aligned, advised as huge pages: a block
-/// of that size from the thread's cache, or a new one; nullptr on failure.
+/// `bytes` (a multiple of kHugePageBytes), kHugePageBytes-aligned, advised as huge pages;
+/// nullptr on failure. Freed with std::free.
 void* allocate_huge_pages(std::size_t bytes);
-/// Returns a block from allocate_huge_pages(bytes) to the thread's cache, or frees it when the
-/// cache would exceed kHugePageCacheBytes.
-void free_huge_pages(void* block, std::size_t bytes) noexcept;
 
 template <typename T>
 class HugePageAllocator {
@@ -55,7 +48,7 @@ class HugePageAllocator {
         if (n * sizeof(T) < kHugePageArrayBytes)
             std::allocator<T>().deallocate(p, n);
         else
-            free_huge_pages(p, rounded(n * sizeof(T)));
+            std::free(p);
     }
 
     template <typename U>
