@@ -17,4 +17,8 @@ void* allocate_huge_pages(std::size_t bytes) {
     return block;
 }
 
+void free_huge_pages(void* block) noexcept {
+    std::free(block);
+}
+
 }  // namespace isomesh

@@ -11,7 +11,6 @@
 #pragma once
 
 #include <cstddef>
-#include <cstdlib>
 #include <memory>
 #include <new>
 #include <vector>
@@ -23,8 +22,10 @@ inline constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
 inline constexpr std::size_t kHugePageArrayBytes = kHugePageBytes / 2;
 
 /// `bytes` (a multiple of kHugePageBytes), kHugePageBytes-aligned, advised as huge pages;
-/// nullptr on failure. Freed with std::free.
+/// nullptr on failure.
 void* allocate_huge_pages(std::size_t bytes);
+/// Frees a block from allocate_huge_pages.
+void free_huge_pages(void* block) noexcept;
 
 template <typename T>
 class HugePageAllocator {
@@ -48,7 +49,7 @@ class HugePageAllocator {
         if (n * sizeof(T) < kHugePageArrayBytes)
             std::allocator<T>().deallocate(p, n);
         else
-            std::free(p);
+            free_huge_pages(p);
     }
 
     template <typename U>
