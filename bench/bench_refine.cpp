@@ -1,6 +1,13 @@
 // Progressive refinement speed, single-threaded (one refiner per worker):
-// - refine/<surface>/<measure>: splits per second, projection and error included, from the phase-1
-//   mesh to 40,000 triangles. Ratio printed: epsilon4 against the default "distance".
+// - refine/<surface>/<measure>: splits per second (counter splits_per_s, per second of the thread's
+//   CPU time), projection, error and the delta included, from the phase-1 mesh to 40,000
+//   triangles. Ratio printed: epsilon4 against the default "distance".
+//
+// Memory as in isomesh-server: glibc maps every allocation over 256 kB anew
+// (server/resources.cpp), so each refiner's arrays come fresh from the kernel, as in a session.
+// Without it glibc's heap would hand later iterations the pages of earlier ones (the 4 kB page
+// faults of a first refinement, a quarter of its time, would not be counted).
+// ISOMESH_BENCH_MALLOC=default keeps glibc's defaults.
 // - queue/<kind>: the same refinement with the bucket queue and with the binary heap, and
 //   queue_ops/<kind>: the queues alone on a ROAM-like trace (pop the top, push two children with a
 //   fraction of its priority, remove one other element). Ratio printed: heap time / bucket time.
@@ -10,9 +17,11 @@
 //   topology), against meshing the new function from scratch with the pipeline (phase 1 +
 //   refinement to the same budget). Ratio printed: change / scratch (aim: below 1/3).
 #include <benchmark/benchmark.h>
+#include <malloc.h>
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <map>
 #include <memory>
@@ -247,6 +256,9 @@ void print_ratios() {
 }  // namespace isomesh
 
 int main(int argc, char** argv) {
+    const char* malloc_mode = std::getenv("ISOMESH_BENCH_MALLOC");
+    if (!malloc_mode || std::string(malloc_mode) != "default")
+        mallopt(M_MMAP_THRESHOLD, 256 * 1024);
     benchmark::Initialize(&argc, argv);
     isomesh::register_all();
     benchmark::RunSpecifiedBenchmarks();

@@ -120,6 +120,22 @@ bool Constraint::over_limit(const MeshStats& stats) const {
     }
 }
 
+bool Constraint::reads_max_error() const {
+    const Node& n = *node_;
+    switch (n.kind) {
+        case Kind::MaxError:
+        case Kind::Custom:
+            return true;
+        case Kind::AllOf:
+        case Kind::AnyOf:
+        case Kind::Not:
+            return std::any_of(n.parts.begin(), n.parts.end(),
+                               [](const Constraint& c) { return c.reads_max_error(); });
+        default:
+            return false;
+    }
+}
+
 std::optional<std::size_t> Constraint::triangle_limit() const {
     const Node& n = *node_;
     std::optional<std::size_t> limit;

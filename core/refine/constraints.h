@@ -58,6 +58,9 @@ class Constraint {
     /// The largest triangle count that is not over_limit (whatever the errors), or nullopt when
     /// there is no such cap.
     std::optional<std::size_t> triangle_limit() const;
+    /// Whether wants_refinement or over_limit may read MeshStats::max_error (a custom predicate
+    /// may): a refiner leaves it out of the statistics it asks about otherwise.
+    bool reads_max_error() const;
     /// A readable form, e.g. "(triangles < 1000 and max_error > 0.01)".
     std::string describe() const;
 

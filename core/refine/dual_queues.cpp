@@ -109,7 +109,7 @@ std::size_t Refiner::Impl::try_exchange(const MeshStats& stats) {
 }
 
 std::size_t Refiner::Impl::act() {
-    const MeshStats current = stats();
+    const MeshStats current = constraint_stats();
     if (constraint_.wants_refinement(current) && find_split(current, plan_)) {
         if (!prepare(plan_)) return 1;  // no vertex for it: another split next time
         execute(plan_);

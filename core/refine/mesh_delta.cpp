@@ -1,6 +1,7 @@
 #include "refine/mesh_delta.h"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 
 namespace isomesh {
@@ -12,48 +13,98 @@ std::string describe(const char* what, std::uint32_t id) {
 
 }  // namespace
 
+template <typename Entry>
+void DeltaBuilder::net_by_id(const HugePageVector<Entry>& log,
+                             std::uint32_t (*id_of)(const Entry&)) {
+    // runs_ = for every id in the log, in increasing id order, the log indices of its first and
+    // last change: what a stable sort by id followed by a scan of each run of equal ids gives,
+    // without the sort where the ids are compact (they are: ids are given in sequence, and a step
+    // changes mostly recent ones).
+    runs_.clear();
+    if (log.empty()) return;
+    std::uint32_t lo = id_of(log[0]), hi = lo;
+    for (const Entry& c : log) {
+        lo = std::min(lo, id_of(c));
+        hi = std::max(hi, id_of(c));
+    }
+    const std::size_t range = std::size_t{hi} - lo + 1;
+    constexpr std::uint32_t kNone = ~std::uint32_t{0};
+    if (range <= 4 * log.size() + 1024) {
+        first_.assign(range, kNone);
+        last_.resize(range);
+        for (std::uint32_t i = 0; i < log.size(); ++i) {
+            const std::size_t k = id_of(log[i]) - lo;
+            if (first_[k] == kNone) first_[k] = i;
+            last_[k] = i;
+        }
+        for (std::size_t k = 0; k < range; ++k)
+            if (first_[k] != kNone) runs_.push_back({first_[k], last_[k]});
+        return;
+    }
+    // Sparse ids: sort (id, index) keys; they are unique, so the order is the stable one.
+    keys_.clear();
+    for (std::uint32_t i = 0; i < log.size(); ++i)
+        keys_.push_back(std::uint64_t{id_of(log[i])} << 32 | i);
+    std::sort(keys_.begin(), keys_.end());
+    for (std::size_t i = 0; i < keys_.size();) {
+        std::size_t j = i + 1;
+        while (j < keys_.size() && keys_[j] >> 32 == keys_[i] >> 32) ++j;
+        runs_.push_back(
+            {static_cast<std::uint32_t>(keys_[i]), static_cast<std::uint32_t>(keys_[j - 1])});
+        i = j;
+    }
+}
+
 MeshDelta DeltaBuilder::take() {
     MeshDelta delta;
     // Net vertex changes: added (then maybe moved) -> added at its last place, unless removed;
     // moved -> moved to its last place, unless removed; removed -> removed.
-    std::stable_sort(
-        vertices_.begin(), vertices_.end(),
-        [](const VertexChange& a, const VertexChange& b) { return a.vertex.id < b.vertex.id; });
-    for (std::size_t i = 0; i < vertices_.size();) {
-        std::size_t j = i;
-        while (j < vertices_.size() && vertices_[j].vertex.id == vertices_[i].vertex.id) ++j;
-        const VertexChange& first = vertices_[i];
-        const VertexChange& last = vertices_[j - 1];
-        assert(std::count_if(vertices_.begin() + i, vertices_.begin() + j, [](const auto& c) {
-                   return c.change == Change::Added;
-               }) <= (first.change == Change::Added ? 1 : 0));
-        if (last.change == Change::Removed) {
-            if (first.change != Change::Added) delta.removed_vertices.push_back(first.vertex.id);
-        } else if (first.change == Change::Added) {
-            delta.added_vertices.push_back(last.vertex);
-        } else {
-            delta.moved_vertices.push_back(last.vertex);
+    enum VertexList { kRemovedVertex, kAddedVertex, kMovedVertex };
+    net_by_id(
+        vertices_, +[](const VertexChange& c) { return c.vertex.id; });
+    const auto vertex_list = [&](const Run& run) {
+        const VertexChange& first = vertices_[run[0]];
+        if (vertices_[run[1]].change == Change::Removed)
+            return first.change != Change::Added ? int(kRemovedVertex) : 3;
+        return first.change == Change::Added ? int(kAddedVertex) : int(kMovedVertex);
+    };
+    std::array<std::size_t, 4> counts{};
+    for (const Run& run : runs_) ++counts[vertex_list(run)];
+    delta.removed_vertices.reserve(counts[kRemovedVertex]);
+    delta.added_vertices.reserve(counts[kAddedVertex]);
+    delta.moved_vertices.reserve(counts[kMovedVertex]);
+    for (const Run& run : runs_) {
+        switch (vertex_list(run)) {
+            case kRemovedVertex:
+                delta.removed_vertices.push_back(vertices_[run[0]].vertex.id);
+                break;
+            case kAddedVertex:
+                delta.added_vertices.push_back(vertices_[run[1]].vertex);
+                break;
+            case kMovedVertex:
+                delta.moved_vertices.push_back(vertices_[run[1]].vertex);
+                break;
+            default:
+                break;
         }
-        i = j;
     }
     // Net triangle changes: an id always names the same vertices, so only the first and the last
     // change matter (add..add: added; remove..remove: removed; otherwise no change).
-    std::stable_sort(triangles_.begin(), triangles_.end(),
-                     [](const TriangleChange& a, const TriangleChange& b) {
-                         return a.triangle.id < b.triangle.id;
-                     });
-    for (std::size_t i = 0; i < triangles_.size();) {
-        std::size_t j = i;
-        while (j < triangles_.size() && triangles_[j].triangle.id == triangles_[i].triangle.id) ++j;
-        const TriangleChange& first = triangles_[i];
-        const TriangleChange& last = triangles_[j - 1];
-        if (first.change == last.change) {
-            if (first.change == Change::Added)
-                delta.added_triangles.push_back(first.triangle);
-            else
-                delta.removed_triangles.push_back(first.triangle.id);
-        }
-        i = j;
+    net_by_id(
+        triangles_, +[](const TriangleChange& c) { return c.triangle.id; });
+    counts = {};
+    for (const Run& run : runs_)
+        if (triangles_[run[0]].change == triangles_[run[1]].change)
+            ++counts[triangles_[run[0]].change == Change::Added ? 0 : 1];
+    delta.added_triangles.reserve(counts[0]);
+    delta.removed_triangles.reserve(counts[1]);
+    for (const Run& run : runs_) {
+        const TriangleChange& first = triangles_[run[0]];
+        if (first.change != triangles_[run[1]].change) continue;
+        if (first.change == Change::Added)
+            delta.added_triangles.push_back(first.triangle);
+        else
+            delta.removed_triangles.push_back(first.triangle.id);
     }
     vertices_.clear();
     triangles_.clear();

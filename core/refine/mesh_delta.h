@@ -15,6 +15,7 @@
 #include <glm/vec3.hpp>
 
 #include "mesh/mesh.h"
+#include "refine/huge_pages.h"
 
 namespace isomesh {
 
@@ -46,7 +47,8 @@ struct MeshDelta {
 };
 
 /// Accumulates changes as they happen and produces the net delta. Changes are logged in order and
-/// netted per id when the delta is taken (a stable sort by id: no hashing on the refiner's path).
+/// netted per id when the delta is taken (by the first and last change of each id, found by
+/// indexing the ids' range or by sorting: no hashing on the refiner's path).
 class DeltaBuilder {
   public:
     void add_vertex(const DeltaVertex& vertex) { vertices_.push_back({Change::Added, vertex}); }
@@ -56,9 +58,14 @@ class DeltaBuilder {
         triangles_.push_back({Change::Added, triangle});
     }
     void remove_triangle(std::uint32_t id) { triangles_.push_back({Change::Removed, {id, {}}}); }
+    /// Room for this many changes logged at once.
+    void reserve(std::size_t vertex_changes, std::size_t triangle_changes) {
+        vertices_.reserve(vertex_changes);
+        triangles_.reserve(triangle_changes);
+    }
     /// The net delta since construction or the last take(); resets the builder. Preconditions
-    /// (asserted): a vertex id is added at most once and not changed after its removal; a triangle
-    /// id alternates between additions and removals.
+    /// (not checked): a vertex id is added at most once and not changed after its removal; a
+    /// triangle id alternates between additions and removals.
     MeshDelta take();
 
   private:
@@ -71,8 +78,17 @@ class DeltaBuilder {
         Change change;
         DeltaTriangle triangle;
     };
-    std::vector<VertexChange> vertices_;
-    std::vector<TriangleChange> triangles_;
+    /// The first and the last change of one id: indices into a log.
+    using Run = std::array<std::uint32_t, 2>;
+    template <typename Entry>
+    void net_by_id(const HugePageVector<Entry>& log, std::uint32_t (*id_of)(const Entry&));
+
+    HugePageVector<VertexChange> vertices_;
+    HugePageVector<TriangleChange> triangles_;
+    // Scratch of take(), kept between calls.
+    HugePageVector<std::uint32_t> first_, last_;
+    HugePageVector<Run> runs_;
+    std::vector<std::uint64_t> keys_;
 };
 
 /// A mesh keyed by ids, built by applying deltas in order (what a client holds).

@@ -105,7 +105,9 @@ std::string validate_refinable(const Mesh& mesh) {
 
 Refiner::Impl::Impl(std::shared_ptr<const Field> field, const Mesh& first_mesh,
                     RefineSettings settings)
-    : settings_(std::move(settings)), constraint_(settings_.constraint) {
+    : settings_(std::move(settings)),
+      constraint_(settings_.constraint),
+      constraint_reads_max_error_(constraint_.reads_max_error()) {
     if (!field) throw std::invalid_argument("Refiner: null field");
     if (!settings_.error_measure) settings_.error_measure = std::make_shared<DistanceError>();
     if (!(settings_.swap_ratio > 1.0))
@@ -228,9 +230,16 @@ void Refiner::Impl::reserve_for(std::size_t root_triangles) {
     constexpr std::size_t kMostReserved = 500'000;
     const std::size_t leaves =
         std::min(kMostReserved, std::max(root_triangles, constraint_.triangle_limit().value_or(0)));
-    triangles_.reserve(2 * leaves + root_triangles);
+    const std::size_t triangles = 2 * leaves + root_triangles;
+    triangles_.reserve(triangles);
     vertices_.reserve(leaves / 2 + 3);
     records_.reserve(leaves / 2 + 1);
+    // Queue handles are triangle and record slots; the delta logs one change per triangle made
+    // or removed and per vertex made.
+    split_queue_->reserve(triangles);
+    blocked_queue_->reserve(triangles);
+    merge_queue_->reserve(leaves / 2 + 1);
+    delta_.reserve(leaves / 2 + 3, 2 * triangles);
 }
 
 void Refiner::Impl::clear_all_into_delta() {
@@ -303,11 +312,13 @@ StepResult Refiner::Impl::step(const StepBudget& budget, bool take) {
     return result;
 }
 
-MeshStats Refiner::Impl::stats() const {
+MeshStats Refiner::Impl::stats(bool with_max_error) const {
     MeshStats s;
     s.triangles = leaf_count_;
     s.total_error = std::max(0.0, total_error_.value());
-    s.max_error = std::max(split_queue_->extreme_priority(), blocked_queue_->extreme_priority());
+    if (with_max_error)
+        s.max_error =
+            std::max(split_queue_->extreme_priority(), blocked_queue_->extreme_priority());
     return s;
 }
 

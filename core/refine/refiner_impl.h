@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -16,6 +17,7 @@
 #include <glm/geometric.hpp>
 
 #include "mesh/topology.h"
+#include "refine/huge_pages.h"
 #include "refine/refiner.h"
 
 namespace isomesh {
@@ -38,25 +40,29 @@ struct Vertex {
     bool alive = false;
 };
 
+// The fields a split's planning reads (connectivity, state, versions) come first: they fill the
+// first 64 bytes, one cache line (the pool is 64-byte aligned), and planning a split touches the
+// triangles of its chain in random order. The candidate and the error follow.
 struct Triangle {
     std::uint32_t id = 0;
     std::array<std::uint32_t, 3> v{};   // vertex slots, counter-clockwise
     std::array<std::uint32_t, 3> nb{};  // triangle slot across edge v[e]-v[e+1], or kNone
+    std::uint32_t parent = kNone;       // the split record that created it; kNone for roots
+    std::uint32_t split = kNone;        // the split record that replaced it (state Split)
     std::uint8_t base = 0;
     TriangleState state = TriangleState::Free;
-    std::uint32_t parent = kNone;  // the split record that created it; kNone for roots
-    std::uint32_t split = kNone;   // the split record that replaced it (state Split)
-    // The base midpoint projected onto the surface: the vertex a split would create.
-    glm::dvec3 candidate{0.0};
-    glm::dvec3 candidate_normal{0.0};
-    double candidate_gradient_norm = 0.0;
     bool candidate_on_surface = false;
     bool candidate_refused = false;  // no valid split vertex at candidate_version: not split
     bool candidate_retried = false;  // the face-normal candidate was tried at candidate_version
     std::uint64_t candidate_version = 0;
-    double error = 0.0;
     std::uint64_t error_version = 0;
+    // The base midpoint projected onto the surface: the vertex a split would create.
+    glm::dvec3 candidate{0.0};
+    glm::dvec3 candidate_normal{0.0};
+    double candidate_gradient_norm = 0.0;
+    double error = 0.0;
 };
+static_assert(sizeof(Triangle) == 128 && offsetof(Triangle, candidate) == 64);
 
 struct SplitRecord {
     std::uint32_t vertex = kNone;
@@ -91,7 +97,7 @@ class Pool {
     std::uint32_t size() const { return static_cast<std::uint32_t>(items_.size()); }
 
   private:
-    std::vector<T> items_;
+    HugePageVector<T> items_;
     std::vector<std::uint32_t> free_;
 };
 
@@ -164,7 +170,10 @@ class Refiner::Impl {
 
     StepResult step(const StepBudget& budget, bool take_delta);
     void set_field(std::shared_ptr<const Field> field);
-    void set_constraint(Constraint c) { constraint_ = std::move(c); }
+    void set_constraint(Constraint c) {
+        constraint_ = std::move(c);
+        constraint_reads_max_error_ = constraint_.reads_max_error();
+    }
     const Constraint& constraint() const { return constraint_; }
     std::uint64_t version() const { return version_; }
     bool field_change_pending() const { return refresh_pending(); }
@@ -177,7 +186,11 @@ class Refiner::Impl {
     std::uint32_t next_vertex_id() const { return next_vertex_id_; }
     std::uint32_t next_triangle_id() const { return next_triangle_id_; }
     std::size_t inverted_triangles() const;
-    MeshStats stats() const;
+    /// max_error is left 0 without `with_max_error`: finding it may rescan the top bucket of the
+    /// split queue, and most constraints never read it.
+    MeshStats stats(bool with_max_error = true) const;
+    /// stats() as the constraint sees it.
+    MeshStats constraint_stats() const { return stats(constraint_reads_max_error_); }
     QueueEnds queue_ends() const {
         return {split_queue_->extreme_priority(), merge_queue_->extreme_priority()};
     }
@@ -287,6 +300,7 @@ class Refiner::Impl {
 
     RefineSettings settings_;
     Constraint constraint_;
+    bool constraint_reads_max_error_ = false;
     std::shared_ptr<const Field> field_;
     std::unique_ptr<Evaluator> evaluator_;
     std::uint64_t version_ = 1;

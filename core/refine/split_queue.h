@@ -25,6 +25,8 @@
 #include <limits>
 #include <vector>
 
+#include "refine/huge_pages.h"
+
 namespace isomesh {
 
 /// Which end of the order top() returns.
@@ -58,6 +60,9 @@ class PriorityQueue {
     /// Calls visit(handle) for elements in queue order until it returns true (stop) or the queue
     /// is exhausted. The queue must not be modified during the visit.
     virtual void visit_in_order(const std::function<bool(std::uint32_t)>& visit) const = 0;
+    /// Room for handles below `handles` at once (growing the per-handle arrays by doubling maps
+    /// fresh pages again and again).
+    virtual void reserve(std::size_t handles) = 0;
     /// The exact extreme priority (the largest for HighestFirst, the smallest for LowestFirst);
     /// 0 when empty. BucketQueue scans the first bucket for it.
     virtual double extreme_priority() const = 0;
@@ -87,6 +92,7 @@ class BucketQueue final : public PriorityQueue {
     void visit_in_order(const std::function<bool(std::uint32_t)>& visit) const override;
     double extreme_priority() const override;
     void clear() override;
+    void reserve(std::size_t handles) override { links_.reserve(handles); }
 
     /// The bucket `priority` falls into (exposed for tests).
     std::uint32_t bucket_of(double priority) const;
@@ -119,7 +125,7 @@ class BucketQueue final : public PriorityQueue {
     mutable std::vector<List> heads_;
     std::vector<std::uint64_t> occupied_;  // one bit per bucket
     std::vector<std::uint64_t> summary_;   // one bit per word of occupied_
-    std::vector<Link> links_;              // indexed by handle
+    HugePageVector<Link> links_;           // indexed by handle
     std::size_t size_ = 0;
 };
 
@@ -137,6 +143,7 @@ class HeapQueue final : public PriorityQueue {
     void visit_in_order(const std::function<bool(std::uint32_t)>& visit) const override;
     double extreme_priority() const override;
     void clear() override;
+    void reserve(std::size_t handles) override;
 
   private:
     bool before(std::uint32_t a, std::uint32_t b) const;  // a comes out of the queue before b
@@ -145,9 +152,9 @@ class HeapQueue final : public PriorityQueue {
     void place(std::size_t index, std::uint32_t handle);
 
     QueueOrder order_;
-    std::vector<std::uint32_t> heap_;
-    std::vector<std::uint32_t> position_;  // indexed by handle; kNone: not in the queue
-    std::vector<double> priority_;         // indexed by handle
+    HugePageVector<std::uint32_t> heap_;
+    HugePageVector<std::uint32_t> position_;  // indexed by handle; kNone: not in the queue
+    HugePageVector<double> priority_;         // indexed by handle
 };
 
 }  // namespace isomesh

@@ -41,6 +41,42 @@ TEST(DeltaBuilder, moves_fold_into_additions_and_lists_are_sorted) {
     EXPECT_TRUE(b.take().empty());  // take() resets
 }
 
+// take() indexes the ids' range when the ids are close together and sorts them when they are far
+// apart (a long session's old and new ids): both give the same net changes.
+TEST(DeltaBuilder, far_apart_ids_net_as_close_ones) {
+    auto log = [](std::uint32_t spread) {
+        DeltaBuilder b;
+        for (std::uint32_t i = 0; i < 50; ++i) {
+            const std::uint32_t id = (i * 7 % 50) * spread;
+            b.add_vertex(vertex(id, i));
+            if (i % 3 == 0) b.move_vertex(vertex(id, i + 0.5));
+            if (i % 5 == 0) b.remove_vertex(id);
+            b.remove_triangle(id + 1);
+            if (i % 2 == 0) b.add_triangle({id + 1, {id, 0, 1}});
+            b.add_triangle({id + 2, {id, 1, 2}});
+        }
+        return b.take();
+    };
+    const MeshDelta close = log(3);
+    const MeshDelta far = log(10'000'000);
+    auto scaled = [](std::uint32_t id) { return id / 3 * 10'000'000 + id % 3; };
+    ASSERT_EQ(far.removed_triangles.size(), close.removed_triangles.size());
+    for (std::size_t i = 0; i < close.removed_triangles.size(); ++i)
+        EXPECT_EQ(far.removed_triangles[i], scaled(close.removed_triangles[i]));
+    ASSERT_EQ(far.added_triangles.size(), close.added_triangles.size());
+    for (std::size_t i = 0; i < close.added_triangles.size(); ++i)
+        EXPECT_EQ(far.added_triangles[i].id, scaled(close.added_triangles[i].id));
+    ASSERT_EQ(far.added_vertices.size(), close.added_vertices.size());
+    for (std::size_t i = 0; i < close.added_vertices.size(); ++i) {
+        EXPECT_EQ(far.added_vertices[i].id, scaled(close.added_vertices[i].id));
+        EXPECT_EQ(far.added_vertices[i].position, close.added_vertices[i].position);
+    }
+    EXPECT_TRUE(far.removed_vertices.empty() && close.removed_vertices.empty());
+    EXPECT_EQ(close.added_vertices.size(), 40u);     // 10 of 50 removed
+    EXPECT_EQ(close.removed_triangles.size(), 25u);  // odd i: removed, not restored
+    EXPECT_EQ(close.added_triangles.size(), 50u);    // every id + 2
+}
+
 TEST(DeltaMesh, applies_in_order_and_reports_inconsistencies) {
     DeltaMesh mesh;
     MeshDelta first;
