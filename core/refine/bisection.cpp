@@ -83,7 +83,7 @@ void Refiner::Impl::block(std::uint32_t t) {
 }
 
 bool Refiner::Impl::prepare(const SplitPlan& plan) {
-    ensure_candidates(plan.chain);
+    ensure_candidates(plan.chain, /*look_ahead=*/true);
     bool ok = true, retried = false;
     for (std::size_t i = 0; i < plan.chain.size(); ++i) {
         Triangle& T = triangles_[plan.chain[i]];
@@ -159,6 +159,7 @@ bool Refiner::Impl::retry_candidate(const SplitPlan& plan, std::size_t i) {
     T.candidate_normal = p.normal;
     T.candidate_gradient_norm = p.gradient_norm;
     T.candidate_on_surface = true;
+    T.midpoint_value_known = false;
     if (split_folds(plan, i)) {
         T = before;
         return false;
@@ -170,6 +171,7 @@ bool Refiner::Impl::retry_candidate(const SplitPlan& plan, std::size_t i) {
         P.candidate_gradient_norm = T.candidate_gradient_norm;
         P.candidate_on_surface = true;
         P.candidate_refused = false;
+        P.midpoint_value_known = false;
     }
     return true;
 }
@@ -293,6 +295,7 @@ void Refiner::Impl::merge(std::uint32_t record) {
         P.candidate_gradient_norm = M.gradient_norm;
         P.candidate_on_surface = M.on_surface;
         P.candidate_version = M.version;
+        P.midpoint_value_known = false;
     }
     delta_.remove_vertex(M.id);
     vertices_[R.vertex].alive = false;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -55,9 +56,20 @@ void ErrorMeasure::triangle_errors(Evaluator& evaluator,
         errors[i] = triangle_error(evaluator, triangles[i]);
 }
 
+void ErrorMeasure::errors_and_midpoint_values(Evaluator& evaluator,
+                                              std::span<const TriangleGeometry> triangles,
+                                              std::span<double> errors,
+                                              std::span<double> midpoint_values) const {
+    assert(triangles.size() == midpoint_values.size());
+    triangle_errors(evaluator, triangles, errors);
+    std::fill(midpoint_values.begin(), midpoint_values.end(),
+              std::numeric_limits<double>::quiet_NaN());
+}
+
 void largest_sample_distances(Evaluator& evaluator, std::span<const TriangleGeometry> triangles,
-                              std::span<double> distances) {
+                              std::span<double> distances, std::span<double> midpoint_values) {
     assert(triangles.size() == distances.size());
+    assert(midpoint_values.empty() || midpoint_values.size() == triangles.size());
     // Two samples per triangle: the base midpoint and the centroid.
     thread_local std::vector<double> x, y, z, f;
     x.clear();
@@ -81,13 +93,21 @@ void largest_sample_distances(Evaluator& evaluator, std::span<const TriangleGeom
             if (std::isfinite(d)) distance = std::max(distance, d);
         }
         distances[i] = distance;
+        if (!midpoint_values.empty()) midpoint_values[i] = f[2 * i];
     }
 }
 
 void DistanceError::triangle_errors(Evaluator& evaluator,
                                     std::span<const TriangleGeometry> triangles,
                                     std::span<double> errors) const {
-    largest_sample_distances(evaluator, triangles, errors);
+    errors_and_midpoint_values(evaluator, triangles, errors, {});
+}
+
+void DistanceError::errors_and_midpoint_values(Evaluator& evaluator,
+                                               std::span<const TriangleGeometry> triangles,
+                                               std::span<double> errors,
+                                               std::span<double> midpoint_values) const {
+    largest_sample_distances(evaluator, triangles, errors, midpoint_values);
     for (std::size_t i = 0; i < triangles.size(); ++i) {
         const double error = errors[i] * longest_edge(triangles[i]);
         errors[i] = std::isfinite(error) ? error : 0.0;
@@ -104,6 +124,13 @@ void MaxDistanceError::triangle_errors(Evaluator& evaluator,
                                        std::span<const TriangleGeometry> triangles,
                                        std::span<double> errors) const {
     largest_sample_distances(evaluator, triangles, errors);
+}
+
+void MaxDistanceError::errors_and_midpoint_values(Evaluator& evaluator,
+                                                  std::span<const TriangleGeometry> triangles,
+                                                  std::span<double> errors,
+                                                  std::span<double> midpoint_values) const {
+    largest_sample_distances(evaluator, triangles, errors, midpoint_values);
 }
 
 double MaxDistanceError::triangle_error(Evaluator& evaluator, const TriangleGeometry& t) const {

@@ -60,6 +60,14 @@ class ErrorMeasure {
     /// override it to batch their evaluations (Evaluator::values). Precondition: equal sizes.
     virtual void triangle_errors(Evaluator& evaluator, std::span<const TriangleGeometry> triangles,
                                  std::span<double> errors) const;
+    /// triangle_errors, and midpoint_values[i] = f((a + b) / 2) of triangles[i] where the
+    /// measure evaluated f there (bit for bit Evaluator::value's), NaN elsewhere: the refiner
+    /// projects that midpoint when it splits the triangle, and starts from the value. The default
+    /// gives NaN. Precondition: equal sizes.
+    virtual void errors_and_midpoint_values(Evaluator& evaluator,
+                                            std::span<const TriangleGeometry> triangles,
+                                            std::span<double> errors,
+                                            std::span<double> midpoint_values) const;
 };
 
 /// epsilon_4: |det(b - a, c - a, m - a)| / 6 with m the projected midpoint.
@@ -75,9 +83,10 @@ class Epsilon4Error final : public ErrorMeasure {
 };
 
 /// distances[i] = the larger first-order distance to the surface at the base midpoint and the
-/// centroid of triangles[i], from one batched evaluation where the gradient norm is known.
+/// centroid of triangles[i], from one batched evaluation where the gradient norm is known; and,
+/// when midpoint_values is not empty, midpoint_values[i] = f at that base midpoint.
 void largest_sample_distances(Evaluator& evaluator, std::span<const TriangleGeometry> triangles,
-                              std::span<double> distances);
+                              std::span<double> distances, std::span<double> midpoint_values = {});
 
 class DistanceError final : public ErrorMeasure {
   public:
@@ -85,6 +94,10 @@ class DistanceError final : public ErrorMeasure {
     double triangle_error(Evaluator& evaluator, const TriangleGeometry& triangle) const override;
     void triangle_errors(Evaluator& evaluator, std::span<const TriangleGeometry> triangles,
                          std::span<double> errors) const override;
+    void errors_and_midpoint_values(Evaluator& evaluator,
+                                    std::span<const TriangleGeometry> triangles,
+                                    std::span<double> errors,
+                                    std::span<double> midpoint_values) const override;
 };
 
 class MaxDistanceError final : public ErrorMeasure {
@@ -93,6 +106,10 @@ class MaxDistanceError final : public ErrorMeasure {
     double triangle_error(Evaluator& evaluator, const TriangleGeometry& triangle) const override;
     void triangle_errors(Evaluator& evaluator, std::span<const TriangleGeometry> triangles,
                          std::span<double> errors) const override;
+    void errors_and_midpoint_values(Evaluator& evaluator,
+                                    std::span<const TriangleGeometry> triangles,
+                                    std::span<double> errors,
+                                    std::span<double> midpoint_values) const override;
 };
 
 /// The measure called `name` ("distance", "epsilon4", "max_distance"), or nullptr for an unknown

@@ -250,6 +250,7 @@ void Refiner::Impl::clear_all_into_delta() {
     vertices_.clear();
     triangles_.clear();
     records_.clear();
+    ahead_.fill({});
     split_queue_->clear();
     blocked_queue_->clear();
     merge_queue_->clear();

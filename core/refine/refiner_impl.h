@@ -54,6 +54,10 @@ struct Triangle {
     bool candidate_on_surface = false;
     bool candidate_refused = false;  // no valid split vertex at candidate_version: not split
     bool candidate_retried = false;  // the face-normal candidate was tried at candidate_version
+    // While the candidate is not current: candidate_gradient_norm holds f at the (unprojected)
+    // base midpoint, which the error measure sampled at error_version; its projection starts
+    // from it. Cleared by every write of the candidate.
+    bool midpoint_value_known = false;
     std::uint64_t candidate_version = 0;
     std::uint64_t error_version = 0;
     // The base midpoint projected onto the surface: the vertex a split would create.
@@ -238,7 +242,21 @@ class Refiner::Impl {
     // --- errors and queues
     ProjectionRequest candidate_request(std::uint32_t t) const;
     /// Projects the base midpoints of `tris` that lack a current one (one batched projection).
-    void ensure_candidates(std::span<const std::uint32_t> tris);
+    /// With `look_ahead`, the batch also projects the base midpoints of the leaves next in the
+    /// split queue, kept aside for their own splits (projected_ahead).
+    void ensure_candidates(std::span<const std::uint32_t> tris, bool look_ahead = false);
+    /// Adds to requests_ the leaves after the top of the split queue whose candidates the next
+    /// splits will want (their slots to ahead_pending_).
+    void request_ahead();
+    /// Asks the cache for the memory t's split will touch (of the leaves projected ahead).
+    void prefetch_split(std::uint32_t t) const;
+    struct AheadProjection;
+    /// The projection of t's base midpoint made ahead for the current version, or nullptr.
+    AheadProjection* projected_ahead(std::uint32_t t);
+    /// The entry holds no projection still to be used.
+    bool free_ahead(const AheadProjection& a) const;
+    /// Sets t's candidate from the projection of its base midpoint.
+    void set_candidate(std::uint32_t t, const Projection& p, const glm::dvec3& direction);
     TriangleGeometry geometry(std::uint32_t t) const;
     /// Brings the errors of `tris` to the current version (one batched evaluation). A split
     /// triangle's projected midpoint is the vertex its split created.
@@ -329,8 +347,25 @@ class Refiner::Impl {
     std::vector<std::uint32_t> stale_, pending_;
     std::vector<ProjectionRequest> requests_;
     std::vector<Projection> projections_;
+    // Projections made ahead of their splits: the split queue's next leaves are almost always
+    // the next splits (a split's children have smaller errors, in lower buckets), so their base
+    // midpoints are projected in the batch of the one asked for. Each is the projection its
+    // split would make (the same request, the same bits), so the results do not change.
+    struct AheadProjection {
+        std::uint32_t slot = kNone;  // kNone: free
+        std::uint32_t id = 0;        // of the triangle in the slot then
+        std::uint64_t version = 0;
+        std::uint64_t batch = 0;  // ahead_batch_ when made
+        Projection projection;
+    };
+    static constexpr std::size_t kProjectedAhead = 7;
+    static constexpr std::uint64_t kAheadBatches = 4;  // an entry's life, in batches
+    std::array<AheadProjection, kProjectedAhead> ahead_{};
+    std::uint64_t ahead_batch_ = 0;  // batches of projections made
+    std::vector<std::uint32_t> ahead_pending_;
     std::vector<TriangleGeometry> geometries_;
     std::vector<double> errors_;
+    std::vector<double> midpoint_values_;
 
     // Refresh after set_field: vertices, then leaves, then mergeable records.
     enum class RefreshStage : std::uint8_t { None, Vertices, Leaves, Records };

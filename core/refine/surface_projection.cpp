@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -43,11 +44,43 @@ SecantSearch::SecantSearch(const ProjectionRequest& request, const ProjectionSet
     const bool usable =
         direction_ != glm::dvec3(0.0) && max_steps_ > 0 && radius_ > 0.0 && finite(start_);
     phase_ = usable ? Phase::Start : Phase::Failed;
+    if (usable && !std::isnan(request.start_value)) advance(request.start_value);
 }
 
 void SecantSearch::feed(double f) {
     assert(wants_value());
     ++evaluations_;
+    gradient_at_point_ = false;
+    advance(f);
+}
+
+void SecantSearch::feed(const ValueGradient& vg) {
+    const glm::dvec3 evaluated = next_point();
+    feed(vg.value);
+    // The check of the point found reads the gradient there: this one, when the search ended on
+    // the very point evaluated (start + 0 * direction differs from the start in a zero's sign).
+    const glm::dvec3 found_point = point();
+    gradient_at_point_ = found() && std::memcmp(&evaluated, &found_point, sizeof evaluated) == 0;
+    gradient_ = vg;
+}
+
+bool SecantSearch::predicts_last_value() const {
+    if (steps_ == max_steps_) return true;  // the next value ends the search whatever it is
+    if (std::isnan(previous_f_) || previous_t_ == t0_) return false;
+    // The secant method converges superlinearly: the next residual is at most about the last one
+    // shrunk by the last ratio. The search ends on it when it is within the tolerance for the
+    // slope of f along the line.
+    const double slope = std::abs((t0_f_ - previous_f_) / (t0_ - previous_t_));
+    const double next = std::abs(t0_f_) * std::min(1.0, std::abs(t0_f_ / previous_f_));
+    return next <= tolerance_ * slope;
+}
+
+void SecantSearch::advance(double f) {
+    step(f);
+    wants_gradient_ = phase_ == Phase::Iterating && predicts_last_value();
+}
+
+void SecantSearch::step(double f) {
     if (phase_ == Phase::Start) {
         start_value_ = t0_f_ = f;
         if (!std::isfinite(f)) {
@@ -78,6 +111,8 @@ void SecantSearch::feed(double f) {
         return;
     }
     const double t2 = t1_ - f * (t1_ - t0_) / (f - t0_f_);
+    previous_t_ = t0_;
+    previous_f_ = t0_f_;
     t0_ = t1_;
     t0_f_ = f;
     t1_ = t2;
@@ -99,7 +134,12 @@ class Projector {
     Projection run() {
         if (!(radius_ > 0.0) || !finite(request_.start)) return failed();
         SecantSearch search(request_, settings_);
-        while (search.wants_value()) search.feed(evaluator_.value(search.next_point()));
+        while (search.wants_value()) {
+            if (search.wants_gradient())
+                search.feed(evaluator_.value_gradient(search.next_point()));
+            else
+                search.feed(evaluator_.value(search.next_point()));
+        }
         return run_after_secant(search);
     }
 
@@ -108,7 +148,7 @@ class Projector {
         evaluations_ += search.evaluations();
         if (!(radius_ > 0.0) || !finite(request_.start)) return failed();
         start_value_ = search.start_value();
-        if (search.found() && check(search.point(), ProjectionMethod::Secant)) return result_;
+        if (search.found() && check(search.point(), search.found_gradient())) return result_;
         if (newton()) return result_;
         if (bracketing()) return result_;
         return failed();
@@ -139,12 +179,13 @@ class Projector {
 
     // Along a line at an angle to the normal the slope understates |grad f|, so the distance is
     // checked with the gradient, which also gives the normal.
-    bool check(const glm::dvec3& p, ProjectionMethod method) {
-        const ValueGradient vg = evaluate(p);
+    // `known`: f and grad f at p, when the search evaluated them there.
+    bool check(const glm::dvec3& p, const ValueGradient* known) {
+        const ValueGradient vg = known ? *known : evaluate(p);
         const double g = glm::length(without_axes(vg.gradient, request_.fixed_axes));
         if (!std::isfinite(vg.value) || !(g > 0.0) || !(std::abs(vg.value) <= tolerance_ * g))
             return false;
-        return succeed(p, vg.gradient, method);
+        return succeed(p, vg.gradient, ProjectionMethod::Secant);
     }
 
     bool newton() {
@@ -233,6 +274,48 @@ class Projector {
     Projection result_;
 };
 
+/// The points of one round of batched secant searches that want the same kind of evaluation.
+struct SecantRound {
+    std::vector<std::size_t> active;  // indices of the searches
+    std::vector<double> x, y, z, f;
+    std::vector<ValueGradient> vg;
+
+    void clear() {
+        active.clear();
+        x.clear();
+        y.clear();
+        z.clear();
+    }
+    void add(std::size_t i, const SecantSearch& search) {
+        const glm::dvec3 p = search.next_point();
+        active.push_back(i);
+        x.push_back(p.x);
+        y.push_back(p.y);
+        z.push_back(p.z);
+    }
+    // A single point goes through the single-point call (cheaper, and the same bits).
+    void evaluate_values(Evaluator& evaluator, std::span<SecantSearch> searches) {
+        if (active.empty()) return;
+        if (active.size() == 1) {
+            searches[active[0]].feed(evaluator.value({x[0], y[0], z[0]}));
+            return;
+        }
+        f.resize(active.size());
+        evaluator.values({x, y, z}, f);
+        for (std::size_t k = 0; k < active.size(); ++k) searches[active[k]].feed(f[k]);
+    }
+    void evaluate_gradients(Evaluator& evaluator, std::span<SecantSearch> searches) {
+        if (active.empty()) return;
+        if (active.size() == 1) {
+            searches[active[0]].feed(evaluator.value_gradient({x[0], y[0], z[0]}));
+            return;
+        }
+        vg.resize(active.size());
+        evaluator.value_gradients({x, y, z}, vg);
+        for (std::size_t k = 0; k < active.size(); ++k) searches[active[k]].feed(vg[k]);
+    }
+};
+
 }  // namespace
 
 Projection project_to_surface(Evaluator& evaluator, const ProjectionRequest& request,
@@ -245,28 +328,21 @@ void project_to_surface(Evaluator& evaluator, std::span<const ProjectionRequest>
     assert(requests.size() == out.size());
     // Scratch kept per thread: the refiner projects a few points at a time, very often.
     thread_local std::vector<SecantSearch> searches;
-    thread_local std::vector<std::size_t> active;
-    thread_local std::vector<double> x, y, z, f;
+    thread_local SecantRound values, gradients;
     searches.clear();
     for (const ProjectionRequest& r : requests) searches.emplace_back(r, settings);
-    // Secant searches in lockstep: one batched evaluation per round.
+    // Secant searches in lockstep: one batched evaluation per round, of the values and of the
+    // values with gradients each search asks for.
     for (;;) {
-        active.clear();
-        x.clear();
-        y.clear();
-        z.clear();
+        values.clear();
+        gradients.clear();
         for (std::size_t i = 0; i < searches.size(); ++i) {
-            if (!searches[i].wants_value()) continue;
-            const glm::dvec3 p = searches[i].next_point();
-            active.push_back(i);
-            x.push_back(p.x);
-            y.push_back(p.y);
-            z.push_back(p.z);
+            if (searches[i].wants_value())
+                (searches[i].wants_gradient() ? gradients : values).add(i, searches[i]);
         }
-        if (active.empty()) break;
-        f.resize(active.size());
-        evaluator.values({x, y, z}, f);
-        for (std::size_t k = 0; k < active.size(); ++k) searches[active[k]].feed(f[k]);
+        if (values.active.empty() && gradients.active.empty()) break;
+        values.evaluate_values(evaluator, searches);
+        gradients.evaluate_gradients(evaluator, searches);
     }
     // Then what project_to_surface does after its own secant search.
     for (std::size_t i = 0; i < requests.size(); ++i) {

@@ -59,13 +59,17 @@ struct ProjectionRequest {
     /// meshing box keeps that face's coordinate, one on an edge of the box both (it moves along
     /// the box's edge), 0 for none.
     std::uint8_t fixed_axes = 0;
+    /// f(start) when the caller evaluated it already (the refiner's error measure samples an edge
+    /// midpoint before the midpoint is projected), else NaN: it saves the first evaluation.
+    double start_value = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Projects request.start onto f = 0, in up to three stages, each rejected when f is undefined or
 /// a step leaves the search radius:
 /// 1. secant iterations on f along request.direction, started with request.slope: plain
-///    evaluations of f, several times cheaper than with the gradient, then one evaluation with
-///    the gradient to check the distance |f| / |grad f| and get the normal;
+///    evaluations of f, several times cheaper than with the gradient, then the gradient at the
+///    last point to check the distance |f| / |grad f| and get the normal (evaluated with the last
+///    value where the search expects that value to end it);
 /// 2. Newton's method along the gradient, from the start;
 /// 3. bracketing: f sampled at growing distances on both sides along request.direction, the
 ///    nearest sign change refined by the Illinois variant of regula falsi, and rejected when |f|
@@ -76,29 +80,50 @@ Projection project_to_surface(Evaluator& evaluator, const ProjectionRequest& req
                               const ProjectionSettings& settings = {});
 
 /// out[i] = project_to_surface(evaluator, requests[i], settings), bit for bit, with the secant
-/// stages of all requests run in lockstep on batched evaluations (Evaluator::values). Precondition:
-/// requests.size() == out.size().
+/// stages of all requests run in lockstep on batched evaluations (Evaluator::values and
+/// value_gradients). Precondition: requests.size() == out.size().
 void project_to_surface(Evaluator& evaluator, std::span<const ProjectionRequest> requests,
                         std::span<Projection> out, const ProjectionSettings& settings = {});
 
 /// The secant stage of a projection as a state machine fed one value of f at a time, so that
 /// many can advance together on batched evaluations.
+///
+/// The point the search ends on is checked with the gradient there. Where the next value is
+/// likely to end the search, wants_gradient() asks for it with the gradient (one evaluation
+/// instead of two; the value is the same bit for bit): the secant method's residuals shrink
+/// superlinearly, so the next one is predicted from the last two.
 class SecantSearch {
   public:
+    /// Starts from request.start_value when it is known (not NaN).
     SecantSearch(const ProjectionRequest& request, const ProjectionSettings& settings);
     bool wants_value() const { return phase_ == Phase::Start || phase_ == Phase::Iterating; }
+    /// The next value should come with the gradient (feed(const ValueGradient&)).
+    bool wants_gradient() const { return wants_gradient_; }
     /// Where f is wanted next. Precondition: wants_value().
     glm::dvec3 next_point() const { return phase_ == Phase::Start ? start_ : point(); }
     void feed(double f);
+    /// feed(vg.value), keeping the gradient for the check of the point the search ends on.
+    void feed(const ValueGradient& vg);
     /// The search ended on a candidate point (to be checked with the gradient).
     bool found() const { return phase_ == Phase::Found; }
     glm::dvec3 point() const { return start_ + t1_ * direction_; }
+    /// f and grad f at point() when the search ended there on a value fed with the gradient
+    /// (bit for bit the point evaluated), else nullptr.
+    const ValueGradient* found_gradient() const {
+        return found() && gradient_at_point_ ? &gradient_ : nullptr;
+    }
     /// f at the start, or NaN before it was fed.
     double start_value() const { return start_value_; }
+    /// Evaluations of f made for the search (a known start value is not one).
     int evaluations() const { return evaluations_; }
 
   private:
     enum class Phase : std::uint8_t { Start, Iterating, Found, Failed };
+    /// step(f), then whether the next value should come with the gradient.
+    void advance(double f);
+    void step(double f);
+    bool predicts_last_value() const;
+
     glm::dvec3 start_;
     glm::dvec3 direction_;
     double slope_;
@@ -109,7 +134,13 @@ class SecantSearch {
     int steps_ = 0;
     int evaluations_ = 0;
     double t0_ = 0.0, t0_f_ = 0.0, t1_ = 0.0;
+    // The point before t0_ and f there (NaN: none yet).
+    double previous_t_ = 0.0;
+    double previous_f_ = std::numeric_limits<double>::quiet_NaN();
     double start_value_ = std::numeric_limits<double>::quiet_NaN();
+    bool wants_gradient_ = false;
+    bool gradient_at_point_ = false;
+    ValueGradient gradient_;
 };
 
 }  // namespace isomesh

@@ -3,6 +3,7 @@
 // batches, and the queue entries and running totals of the leaves.
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 
 #include "refine/refiner_impl.h"
 
@@ -25,10 +26,12 @@ ProjectionRequest Refiner::Impl::candidate_request(std::uint32_t t) const {
     request.scale = glm::length(b.position - a.position);
     request.fixed_axes = T.nb[T.base] == kNone ? face_axes(a.position, b.position, bounds_) : 0;
     if (!(request.scale > 0.0)) request.scale = settings_.min_edge_length;
+    if (T.midpoint_value_known && T.error_version == version_)
+        request.start_value = T.candidate_gradient_norm;
     return request;
 }
 
-void Refiner::Impl::ensure_candidates(std::span<const std::uint32_t> tris) {
+void Refiner::Impl::ensure_candidates(std::span<const std::uint32_t> tris, bool look_ahead) {
     pending_.clear();
     requests_.clear();
     for (std::uint32_t t : tris) {
@@ -44,24 +47,102 @@ void Refiner::Impl::ensure_candidates(std::span<const std::uint32_t> tris) {
             T.candidate_refused = N.candidate_refused;
             T.candidate_retried = N.candidate_retried;
             T.candidate_version = version_;
+            T.midpoint_value_known = false;
+            continue;
+        }
+        if (AheadProjection* a = projected_ahead(t)) {
+            set_candidate(t, a->projection, candidate_request(t).direction);
+            a->slot = kNone;  // used
             continue;
         }
         pending_.push_back(t);
         requests_.push_back(candidate_request(t));
     }
+    if (pending_.empty()) return;
+    ahead_pending_.clear();
+    ++ahead_batch_;
+    if (look_ahead) request_ahead();
     projections_.resize(requests_.size());
     project_to_surface(*evaluator_, requests_, projections_, settings_.projection);
-    for (std::size_t i = 0; i < pending_.size(); ++i) {
-        Triangle& T = triangles_[pending_[i]];
-        const Projection& p = projections_[i];
-        T.candidate = p.position;
-        T.candidate_normal = p.on_surface() ? p.normal : unit_or_zero(requests_[i].direction);
-        T.candidate_gradient_norm = p.gradient_norm;
-        T.candidate_on_surface = p.on_surface();
-        T.candidate_refused = !p.on_surface() || !settings_.box.contains(p.position);
-        T.candidate_retried = false;
-        T.candidate_version = version_;
+    for (std::size_t i = 0; i < pending_.size(); ++i)
+        set_candidate(pending_[i], projections_[i], requests_[i].direction);
+    std::size_t entry = 0;
+    for (std::size_t k = 0; k < ahead_pending_.size(); ++k) {
+        while (!free_ahead(ahead_[entry])) ++entry;
+        const std::uint32_t t = ahead_pending_[k];
+        ahead_[entry] = {t, triangles_[t].id, version_, ahead_batch_,
+                         projections_[pending_.size() + k]};
     }
+}
+
+bool Refiner::Impl::free_ahead(const AheadProjection& a) const {
+    // Used, outdated, or for a triangle split without it (as a diamond partner) or still
+    // waiting after several batches (the queue's order changed): no longer worth keeping.
+    if (a.slot == kNone || a.slot >= triangles_.size() || a.version != version_ ||
+        ahead_batch_ - a.batch > kAheadBatches)
+        return true;
+    const Triangle& T = triangles_[a.slot];
+    return T.id != a.id || T.state != TriangleState::Leaf || T.candidate_version == version_;
+}
+
+void Refiner::Impl::set_candidate(std::uint32_t t, const Projection& p,
+                                  const glm::dvec3& direction) {
+    Triangle& T = triangles_[t];
+    T.candidate = p.position;
+    T.candidate_normal = p.on_surface() ? p.normal : unit_or_zero(direction);
+    T.candidate_gradient_norm = p.gradient_norm;
+    T.candidate_on_surface = p.on_surface();
+    T.candidate_refused = !p.on_surface() || !settings_.box.contains(p.position);
+    T.candidate_retried = false;
+    T.candidate_version = version_;
+    T.midpoint_value_known = false;
+}
+
+void Refiner::Impl::request_ahead() {
+    // The leaves after the top that will want a projection: not current, no current diamond
+    // partner to copy from, not asked for already (nor their partners: the same point).
+    const auto wanted = [&](std::uint32_t t) {
+        const Triangle& T = triangles_[t];
+        if (T.candidate_version == version_ || projected_ahead(t)) return false;
+        const std::uint32_t n = T.nb[T.base];
+        const bool diamond = is_diamond(t, n);
+        if (diamond && triangles_[n].candidate_version == version_) return false;
+        for (const auto* list : {&pending_, &ahead_pending_})
+            for (std::uint32_t u : *list)
+                if (u == t || (diamond && u == n)) return false;
+        return true;
+    };
+    const auto room = static_cast<std::size_t>(std::count_if(
+        ahead_.begin(), ahead_.end(), [&](const AheadProjection& a) { return free_ahead(a); }));
+    if (room == 0) return;
+    std::size_t visited = 0;
+    split_queue_->visit_in_order([&](std::uint32_t t) {
+        if (++visited > 2 * kProjectedAhead) return true;
+        if (wanted(t)) {
+            ahead_pending_.push_back(t);
+            requests_.push_back(candidate_request(t));
+            prefetch_split(t);
+        }
+        return ahead_pending_.size() == room;
+    });
+}
+
+void Refiner::Impl::prefetch_split(std::uint32_t t) const {
+    // What planning and bisecting t will read or write, in the order of its splits to come: its
+    // neighbours (the base neighbour is bisected with it, the others get new neighbours), its
+    // apex, its candidate (the second cache line) and its split record's parent.
+    const Triangle& T = triangles_[t];
+    for (std::uint32_t n : T.nb)
+        if (n != kNone) __builtin_prefetch(&triangles_[n], 1);
+    __builtin_prefetch(&vertices_[T.v[(T.base + 2) % 3]]);
+    __builtin_prefetch(&T.candidate, 1);
+    if (T.parent != kNone) __builtin_prefetch(&records_[T.parent], 1);
+}
+
+Refiner::Impl::AheadProjection* Refiner::Impl::projected_ahead(std::uint32_t t) {
+    for (AheadProjection& a : ahead_)
+        if (a.slot == t && a.id == triangles_[t].id && a.version == version_) return &a;
+    return nullptr;
 }
 
 TriangleGeometry Refiner::Impl::geometry(std::uint32_t t) const {
@@ -94,11 +175,19 @@ void Refiner::Impl::ensure_errors(std::span<const std::uint32_t> tris) {
     geometries_.clear();
     for (std::uint32_t t : stale_) geometries_.push_back(geometry(t));
     errors_.resize(stale_.size());
-    settings_.error_measure->triangle_errors(*evaluator_, geometries_, errors_);
+    midpoint_values_.resize(stale_.size());
+    settings_.error_measure->errors_and_midpoint_values(*evaluator_, geometries_, errors_,
+                                                        midpoint_values_);
     for (std::size_t i = 0; i < stale_.size(); ++i) {
         Triangle& T = triangles_[stale_[i]];
         T.error = errors_[i] >= 0.0 ? errors_[i] : 0.0;  // NaN or negative from a custom measure
         T.error_version = version_;
+        // Kept for the projection of the base midpoint, in the candidate's place until then.
+        if (T.state != TriangleState::Split && T.candidate_version != version_ &&
+            !std::isnan(midpoint_values_[i])) {
+            T.candidate_gradient_norm = midpoint_values_[i];
+            T.midpoint_value_known = true;
+        }
     }
 }
 

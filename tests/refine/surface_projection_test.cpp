@@ -101,10 +101,9 @@ TEST(ProjectToSurface, fails_without_surface_within_reach) {
 namespace isomesh {
 namespace {
 
-// The batched form gives the same projections bit for bit, failures and fallbacks included.
-TEST(ProjectToSurface, batch_matches_one_at_a_time) {
-    auto field = test::compile_field("x^2+y^2+z^2+2cos(2x)=5");
-    auto e = field->make_evaluator();
+// Projection requests around the cosine sphere, some without direction,
+// some without slope, some on a box face.
+std::vector<ProjectionRequest> mixed_requests() {
     std::vector<ProjectionRequest> requests;
     for (int i = 0; i < 300; ++i) {
         const glm::dvec3 start(std::sin(i) * 2.0, std::cos(0.7 * i) * 2.0, std::sin(1.3 * i));
@@ -112,6 +111,19 @@ TEST(ProjectToSurface, batch_matches_one_at_a_time) {
         requests.push_back({start, direction, i % 3 == 0 ? 0.0 : 3.0, 0.2 + (i % 7) * 0.1,
                             std::uint8_t(i % 11 == 0 ? 0b100 : 0)});
     }
+    return requests;
+}
+
+bool same_projection(const Projection& a, const Projection& b) {
+    return a.position == b.position && a.normal == b.normal && a.gradient_norm == b.gradient_norm &&
+           a.method == b.method;
+}
+
+// The batched form gives the same projections bit for bit, failures and fallbacks included.
+TEST(ProjectToSurface, batch_matches_one_at_a_time) {
+    auto field = test::compile_field("x^2+y^2+z^2+2cos(2x)=5");
+    auto e = field->make_evaluator();
+    const std::vector<ProjectionRequest> requests = mixed_requests();
     std::vector<Projection> batch(requests.size());
     project_to_surface(*e, requests, batch);
     int methods[4] = {0, 0, 0, 0};
@@ -125,6 +137,87 @@ TEST(ProjectToSurface, batch_matches_one_at_a_time) {
     EXPECT_GT(methods[int(ProjectionMethod::Secant)], 100);
     EXPECT_GT(methods[int(ProjectionMethod::Newton)], 10);
     EXPECT_GT(methods[int(ProjectionMethod::Failed)], 0);  // too far from the surface
+}
+
+// f(start) given by the caller (the refiner's error measure sampled it) is one evaluation fewer,
+// and the same projection bit for bit.
+TEST(ProjectToSurface, known_start_value_saves_an_evaluation_and_changes_nothing) {
+    auto field = test::compile_field("x^2+y^2+z^2+2cos(2x)=5");
+    auto e = field->make_evaluator();
+    std::vector<ProjectionRequest> requests = mixed_requests();
+    std::vector<Projection> unknown(requests.size()), known(requests.size());
+    project_to_surface(*e, requests, unknown);
+    for (ProjectionRequest& r : requests) r.start_value = e->value(r.start);
+    project_to_surface(*e, requests, known);
+    int saved = 0;
+    for (std::size_t i = 0; i < requests.size(); ++i) {
+        ASSERT_TRUE(same_projection(known[i], unknown[i])) << i;
+        ASSERT_TRUE(same_projection(known[i], project_to_surface(*e, requests[i]))) << i;
+        ASSERT_LE(known[i].evaluations, unknown[i].evaluations) << i;
+        saved += unknown[i].evaluations - known[i].evaluations;
+    }
+    EXPECT_GT(saved, 150);  // every secant search with a direction
+}
+
+// Fed with gradients where it asks for them, the secant search visits the same points and ends
+// on the same one, where it then hands over the gradient the check would have evaluated.
+TEST(SecantSearch, gradients_where_it_asks_change_nothing_and_serve_the_check) {
+    auto field = test::compile_field("x^2+y^2+z^2+2cos(2x)=5");
+    auto e = field->make_evaluator();
+    int served = 0, found = 0;
+    for (const ProjectionRequest& request : mixed_requests()) {
+        SecantSearch values(request, {});
+        SecantSearch gradients(request, {});
+        while (values.wants_value()) {
+            ASSERT_TRUE(gradients.wants_value());
+            const glm::dvec3 p = values.next_point();
+            ASSERT_EQ(p, gradients.next_point());
+            values.feed(e->value(p));
+            if (gradients.wants_gradient())
+                gradients.feed(e->value_gradient(p));
+            else
+                gradients.feed(e->value(p));
+        }
+        ASSERT_FALSE(gradients.wants_value());
+        ASSERT_EQ(values.found(), gradients.found());
+        EXPECT_EQ(values.found_gradient(), nullptr);
+        if (!gradients.found()) continue;
+        ++found;
+        ASSERT_EQ(values.point(), gradients.point());
+        if (const ValueGradient* vg = gradients.found_gradient()) {
+            const ValueGradient fresh = e->value_gradient(gradients.point());
+            EXPECT_EQ(vg->value, fresh.value);
+            EXPECT_EQ(vg->gradient, fresh.gradient);
+            ++served;
+        }
+    }
+    EXPECT_GT(found, 100);
+    EXPECT_GT(served, found / 2);  // the prediction is right more often than not
+}
+
+TEST(ErrorMeasure, midpoint_values_are_f_at_the_base_midpoints) {
+    auto field = test::compile_field("x^2+y^2+z^2+2cos(2x)=5");
+    auto e = field->make_evaluator();
+    std::vector<TriangleGeometry> triangles;
+    for (int i = 0; i < 50; ++i) {
+        const glm::dvec3 a(std::sin(i), std::cos(i), 1.5), b = a + glm::dvec3(0.3, 0.1, 0),
+                                                           c = a + glm::dvec3(0, 0.2, 0.1);
+        triangles.push_back({a, b, c, 0.5 * (a + b), i % 4 ? 3.0 : 0.0});
+    }
+    for (const std::string& name : error_measure_names()) {
+        auto measure = make_error_measure(name);
+        std::vector<double> errors(triangles.size()), alone(triangles.size()),
+            values(triangles.size());
+        measure->errors_and_midpoint_values(*e, triangles, errors, values);
+        measure->triangle_errors(*e, triangles, alone);
+        for (std::size_t i = 0; i < triangles.size(); ++i) {
+            ASSERT_EQ(errors[i], alone[i]) << name << " " << i;
+            if (name == "epsilon4")  // evaluates nothing
+                ASSERT_TRUE(std::isnan(values[i]));
+            else
+                ASSERT_EQ(values[i], e->value(0.5 * (triangles[i].a + triangles[i].b)));
+        }
+    }
 }
 
 TEST(ErrorMeasure, batch_matches_one_at_a_time) {
