@@ -80,14 +80,17 @@ class DeltaBuilder {
     };
     /// The first and the last change of one id: indices into a log.
     using Run = std::array<std::uint32_t, 2>;
+    static constexpr std::uint32_t kNoChange = ~std::uint32_t{0};
     template <typename Entry>
-    void net_by_id(const HugePageVector<Entry>& log, std::uint32_t (*id_of)(const Entry&));
+    void index_by_id(const HugePageVector<Entry>& log, std::uint32_t (*id_of)(const Entry&));
+    /// Calls visit(run) for every id of the log last indexed, in increasing id order.
+    template <typename Visit>
+    void visit_runs(Visit visit) const;
 
     HugePageVector<VertexChange> vertices_;
     HugePageVector<TriangleChange> triangles_;
-    // Scratch of take(), kept between calls.
-    HugePageVector<std::uint32_t> first_, last_;
-    HugePageVector<Run> runs_;
+    // Scratch of take(), kept between calls: the runs by id (compact ids) or sorted keys.
+    HugePageVector<Run> by_id_;
     std::vector<std::uint64_t> keys_;
 };
 
