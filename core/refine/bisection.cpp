@@ -3,6 +3,7 @@
 // triangle and of its base neighbour (a diamond), after the forced splits that make the
 // neighbour's base edge the same; a merge undoes one such bisection once its children are leaves.
 #include <cassert>
+#include <cmath>
 
 #include "refine/refiner_impl.h"
 
@@ -42,7 +43,18 @@ namespace {
 /// Marching Cubes can stand a triangle nearly across the surface where the lattice barely cuts a
 /// ridge (cosine near 0, either sign); only such clear folds are inside out.
 bool clear_fold(const glm::dvec3& n, const glm::dvec3& corner_normals) {
-    return glm::dot(n, corner_normals) < -0.25 * glm::length(n) * glm::length(corner_normals);
+    const double d = glm::dot(n, corner_normals);
+    // The right side is never positive: no square roots where the triangle faces along them.
+    if (!(d < 0.0)) return false;
+    return d < -0.25 * glm::length(n) * glm::length(corner_normals);
+}
+
+/// |v| <= bound, without the square root where |v|^2 is clearly larger (the same answer: then
+/// |v| > bound, also where bound^2 underflows).
+bool length_at_most(const glm::dvec3& v, double bound) {
+    const double squared = glm::dot(v, v);
+    if (squared > 4.0 * bound * bound) return false;
+    return std::sqrt(squared) <= bound;
 }
 
 }  // namespace
@@ -66,7 +78,7 @@ bool Refiner::Impl::folds(const SplitCorners& k, const glm::dvec3& m, const glm:
         const double longest = std::max(
             {glm::dot(q - p, q - p), glm::dot(k.c - q, k.c - q), glm::dot(p - k.c, p - k.c)});
         // Flipped against the parent, or of zero area (|cross| <= 1e-14 longest^2).
-        if (!(glm::dot(child, parent) > 0.0) || glm::length(child) <= 1e-14 * longest) return true;
+        if (!(glm::dot(child, parent) > 0.0) || length_at_most(child, 1e-14 * longest)) return true;
         // On a coarse (simplified) mesh a child can keep its parent's side yet face the
         // surface's inside: a parent facing the way its corners' normals do (towards f > 0) gets
         // no child that does not, and no split makes a clear fold where there was none.

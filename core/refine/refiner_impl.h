@@ -229,9 +229,13 @@ class Refiner::Impl {
     bool splittable(std::uint32_t t) const {
         const Triangle& T = triangles_[t];
         if (T.candidate_refused && T.candidate_version == version_) return false;
-        for (int e = 0; e < 3; ++e)
-            if (!(glm::length(position(t, e + 1) - position(t, e)) >= settings_.min_edge_length))
-                return false;
+        const double m = settings_.min_edge_length;
+        for (int e = 0; e < 3; ++e) {
+            const glm::dvec3 edge = position(t, e + 1) - position(t, e);
+            // |edge| >= m without the square root where |edge|^2 is clearly larger.
+            const double squared = glm::dot(edge, edge);
+            if (!(squared > 4.0 * m * m) && !(std::sqrt(squared) >= m)) return false;
+        }
         return true;
     }
     bool is_diamond(std::uint32_t t, std::uint32_t n) const {
