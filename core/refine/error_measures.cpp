@@ -72,17 +72,20 @@ void largest_sample_distances(Evaluator& evaluator, std::span<const TriangleGeom
     assert(midpoint_values.empty() || midpoint_values.size() == triangles.size());
     // Two samples per triangle: the base midpoint and the centroid.
     thread_local std::vector<double> x, y, z, f;
-    x.clear();
-    y.clear();
-    z.clear();
-    for (const TriangleGeometry& t : triangles) {
-        for (const glm::dvec3& p : {0.5 * (t.a + t.b), (t.a + t.b + t.c) / 3.0}) {
-            x.push_back(p.x);
-            y.push_back(p.y);
-            z.push_back(p.z);
+    const std::size_t n = 2 * triangles.size();
+    x.resize(n);
+    y.resize(n);
+    z.resize(n);
+    for (std::size_t i = 0; i < triangles.size(); ++i) {
+        const TriangleGeometry& t = triangles[i];
+        const glm::dvec3 samples[2] = {0.5 * (t.a + t.b), (t.a + t.b + t.c) / 3.0};
+        for (std::size_t k = 0; k < 2; ++k) {
+            x[2 * i + k] = samples[k].x;
+            y[2 * i + k] = samples[k].y;
+            z[2 * i + k] = samples[k].z;
         }
     }
-    f.resize(x.size());
+    f.resize(n);
     evaluator.values({x, y, z}, f);
     for (std::size_t i = 0; i < triangles.size(); ++i) {
         double distance = 0.0;

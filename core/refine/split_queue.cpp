@@ -48,6 +48,11 @@ BucketQueue::BucketQueue(QueueOrder order, BucketQueueSettings settings) : order
 }
 
 std::uint32_t BucketQueue::bucket_of(double priority) const {
+    return bucket_index(priority);
+}
+
+// bucket_of, inlined into insert.
+inline std::uint32_t BucketQueue::bucket_index(double priority) const {
     const double p = ordering_value(priority);
     if (p == 0.0) return 0;
     const std::uint64_t bits = std::bit_cast<std::uint64_t>(p);
@@ -60,7 +65,7 @@ std::uint32_t BucketQueue::bucket_of(double priority) const {
     return static_cast<std::uint32_t>(bucket > last ? last : bucket);
 }
 
-void BucketQueue::set_occupied(std::uint32_t bucket, bool occupied) {
+inline void BucketQueue::set_occupied(std::uint32_t bucket, bool occupied) {
     const std::uint32_t word = bucket / 64;
     const std::uint64_t bit = std::uint64_t{1} << (bucket % 64);
     if (occupied) {
@@ -77,7 +82,7 @@ void BucketQueue::insert(std::uint32_t handle, double priority) {
     grow_to(links_, handle, Link{});
     Link& link = links_[handle];
     assert(link.bucket == kNone && "insert: handle already queued");
-    const std::uint32_t bucket = bucket_of(priority);
+    const std::uint32_t bucket = bucket_index(priority);
     List& list = heads_[bucket];
     const double p = ordering_value(priority);
     if (list.head == kNone) {

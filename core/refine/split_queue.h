@@ -114,7 +114,8 @@ class BucketQueue final : public PriorityQueue {
         bool extreme_stale = false;
     };
 
-    std::uint32_t first_bucket() const;  // kNone when empty
+    std::uint32_t bucket_index(double priority) const;  // bucket_of
+    std::uint32_t first_bucket() const;                 // kNone when empty
     std::uint32_t next_bucket(std::uint32_t bucket) const;
     void set_occupied(std::uint32_t bucket, bool occupied);
     bool better(double a, double b) const;  // a comes before b in queue order
