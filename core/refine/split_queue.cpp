@@ -78,10 +78,10 @@ inline void BucketQueue::set_occupied(std::uint32_t bucket, bool occupied) {
 }
 
 void BucketQueue::insert(std::uint32_t handle, double priority) {
-    assert(handle != kNone);
+    assert(handle < kNotQueued);
     grow_to(links_, handle, Link{});
     Link& link = links_[handle];
-    assert(link.bucket == kNone && "insert: handle already queued");
+    assert(link.prev == kNotQueued && "insert: handle already queued");
     const std::uint32_t bucket = bucket_index(priority);
     List& list = heads_[bucket];
     const double p = ordering_value(priority);
@@ -91,7 +91,7 @@ void BucketQueue::insert(std::uint32_t handle, double priority) {
     } else if (!list.extreme_stale && better(p, list.extreme)) {
         list.extreme = p;
     }
-    link = Link{list.tail, kNone, bucket, priority};
+    link = Link{list.tail, kNone, priority};
     if (list.tail != kNone)
         links_[list.tail].next = handle;
     else
@@ -104,7 +104,8 @@ void BucketQueue::insert(std::uint32_t handle, double priority) {
 void BucketQueue::remove(std::uint32_t handle) {
     assert(contains(handle));
     Link& link = links_[handle];
-    List& list = heads_[link.bucket];
+    const std::uint32_t bucket = bucket_index(link.priority);  // as when it was inserted
+    List& list = heads_[bucket];
     if (link.prev != kNone)
         links_[link.prev].next = link.next;
     else
@@ -113,7 +114,7 @@ void BucketQueue::remove(std::uint32_t handle) {
         links_[link.next].prev = link.prev;
     else
         list.tail = link.prev;
-    if (list.head == kNone) set_occupied(link.bucket, false);
+    if (list.head == kNone) set_occupied(bucket, false);
     if (ordering_value(link.priority) == list.extreme) list.extreme_stale = true;
     link = Link{};
     --size_;
@@ -125,7 +126,7 @@ void BucketQueue::update(std::uint32_t handle, double priority) {
 }
 
 bool BucketQueue::contains(std::uint32_t handle) const {
-    return handle < links_.size() && links_[handle].bucket != kNone;
+    return handle < links_.size() && links_[handle].prev != kNotQueued;
 }
 
 double BucketQueue::priority(std::uint32_t handle) const {

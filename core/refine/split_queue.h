@@ -99,10 +99,12 @@ class BucketQueue final : public PriorityQueue {
     std::uint32_t bucket_count() const { return static_cast<std::uint32_t>(heads_.size()); }
 
   private:
+    // Links by handle: 16 bytes, four to a cache line (an element's bucket is bucket_of its
+    // priority, not stored).
+    static constexpr std::uint32_t kNotQueued = kNone - 1;
     struct Link {
-        std::uint32_t prev = kNone;
+        std::uint32_t prev = kNotQueued;  // kNotQueued: not in the queue; kNone: the head
         std::uint32_t next = kNone;
-        std::uint32_t bucket = kNone;  // kNone: not in the queue
         double priority = 0.0;
     };
     struct List {
