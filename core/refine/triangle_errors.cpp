@@ -70,6 +70,9 @@ void Refiner::Impl::ensure_candidates(std::span<const std::uint32_t> tris, bool 
     for (std::size_t k = 0; k < ahead_pending_.size(); ++k) {
         while (!free_ahead(ahead_[entry])) ++entry;
         const std::uint32_t t = ahead_pending_[k];
+        // The base neighbour, prefetched with t, has arrived meanwhile: now its own neighbours.
+        if (const std::uint32_t n = triangles_[t].nb[triangles_[t].base]; n != kNone)
+            prefetch_split(n);
         ahead_[entry] = {t, triangles_[t].id, version_, ahead_batch_,
                          projections_[pending_.size() + k]};
     }
