@@ -28,17 +28,19 @@ static_assert(kNoNeighbour == PriorityQueue::kNone);
 
 enum class TriangleState : std::uint8_t { Leaf, Split, Free };
 
+// 80 bytes: the small fields share the id's word.
 struct Vertex {
     std::uint32_t id = 0;
+    std::uint8_t fixed_axes = 0;  // on faces of the meshing box: the coordinates that stay (bits)
+    bool on_surface = true;
+    bool alive = false;
     glm::dvec3 position{0.0};
     glm::dvec3 normal{0.0};
     double gradient_norm = 0.0;  // |grad f| at position; 0 when unknown
     double scale = 0.0;  // the length of the edge it bisected (phase-1: shortest incident edge)
     std::uint64_t version = 0;
-    std::uint8_t fixed_axes = 0;  // on faces of the meshing box: the coordinates that stay (bits)
-    bool on_surface = true;
-    bool alive = false;
 };
+static_assert(sizeof(Vertex) == 80);
 
 // The fields a split's planning reads (connectivity, state, versions) come first: they fill the
 // first 64 bytes, one cache line (the pool is 64-byte aligned), and planning a split touches the
