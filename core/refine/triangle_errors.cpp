@@ -121,10 +121,13 @@ void Refiner::Impl::request_ahead() {
     std::size_t visited = 0;
     split_queue_->visit_in_order([&](std::uint32_t t) {
         if (++visited > 2 * kProjectedAhead) return true;
-        if (wanted(t)) {
-            ahead_pending_.push_back(t);
-            requests_.push_back(candidate_request(t));
-            prefetch_split(t);
+        // t, then the base neighbour its split will force first when they are no diamond.
+        for (std::uint32_t u = t; u != kNone && ahead_pending_.size() < room && wanted(u);) {
+            ahead_pending_.push_back(u);
+            requests_.push_back(candidate_request(u));
+            prefetch_split(u);
+            const std::uint32_t n = triangles_[u].nb[triangles_[u].base];
+            u = u == t && !is_diamond(u, n) ? n : kNone;
         }
         return ahead_pending_.size() == room;
     });
