@@ -293,26 +293,19 @@ struct SecantRound {
         y.push_back(p.y);
         z.push_back(p.z);
     }
-    // A single point goes through the single-point call (cheaper, and the same bits).
-    void evaluate_values(Evaluator& evaluator, std::span<SecantSearch> searches) {
+    // Feeds each search f at its point (with the gradient: Result = ValueGradient) from one
+    // batched call; a single point goes through the single-point call (cheaper, the same bits).
+    template <class Result, class One, class Batch>
+    void evaluate(std::span<SecantSearch> searches, std::vector<Result>& out, One one,
+                  Batch batch) {
         if (active.empty()) return;
         if (active.size() == 1) {
-            searches[active[0]].feed(evaluator.value({x[0], y[0], z[0]}));
+            searches[active[0]].feed(one(glm::dvec3(x[0], y[0], z[0])));
             return;
         }
-        f.resize(active.size());
-        evaluator.values({x, y, z}, f);
-        for (std::size_t k = 0; k < active.size(); ++k) searches[active[k]].feed(f[k]);
-    }
-    void evaluate_gradients(Evaluator& evaluator, std::span<SecantSearch> searches) {
-        if (active.empty()) return;
-        if (active.size() == 1) {
-            searches[active[0]].feed(evaluator.value_gradient({x[0], y[0], z[0]}));
-            return;
-        }
-        vg.resize(active.size());
-        evaluator.value_gradients({x, y, z}, vg);
-        for (std::size_t k = 0; k < active.size(); ++k) searches[active[k]].feed(vg[k]);
+        out.resize(active.size());
+        batch(PointBatch{x, y, z}, std::span<Result>(out));
+        for (std::size_t k = 0; k < active.size(); ++k) searches[active[k]].feed(out[k]);
     }
 };
 
@@ -341,8 +334,15 @@ void project_to_surface(Evaluator& evaluator, std::span<const ProjectionRequest>
                 (searches[i].wants_gradient() ? gradients : values).add(i, searches[i]);
         }
         if (values.active.empty() && gradients.active.empty()) break;
-        values.evaluate_values(evaluator, searches);
-        gradients.evaluate_gradients(evaluator, searches);
+        values.evaluate(
+            searches, values.f, [&](const glm::dvec3& p) { return evaluator.value(p); },
+            [&](const PointBatch& b, std::span<double> out) { evaluator.values(b, out); });
+        gradients.evaluate(
+            searches, gradients.vg,
+            [&](const glm::dvec3& p) { return evaluator.value_gradient(p); },
+            [&](const PointBatch& b, std::span<ValueGradient> out) {
+                evaluator.value_gradients(b, out);
+            });
     }
     // Then what project_to_surface does after its own secant search.
     for (std::size_t i = 0; i < requests.size(); ++i) {

@@ -195,15 +195,22 @@ TEST(SecantSearch, gradients_where_it_asks_change_nothing_and_serve_the_check) {
     EXPECT_GT(served, found / 2);  // the prediction is right more often than not
 }
 
+// Triangles near the cosine sphere, their projected midpoints the base midpoints moved by
+// `offset`; every fourth without a gradient norm.
+std::vector<TriangleGeometry> sample_triangles(int count, const glm::dvec3& offset) {
+    std::vector<TriangleGeometry> triangles;
+    for (int i = 0; i < count; ++i) {
+        const glm::dvec3 a(std::sin(i), std::cos(i), 1.5), b = a + glm::dvec3(0.3, 0.1, 0),
+                                                           c = a + glm::dvec3(0, 0.2, 0.1);
+        triangles.push_back({a, b, c, 0.5 * (a + b) + offset, i % 4 ? 3.0 : 0.0});
+    }
+    return triangles;
+}
+
 TEST(ErrorMeasure, midpoint_values_are_f_at_the_base_midpoints) {
     auto field = test::compile_field("x^2+y^2+z^2+2cos(2x)=5");
     auto e = field->make_evaluator();
-    std::vector<TriangleGeometry> triangles;
-    for (int i = 0; i < 50; ++i) {
-        const glm::dvec3 a(std::sin(i), std::cos(i), 1.5), b = a + glm::dvec3(0.3, 0.1, 0),
-                                                           c = a + glm::dvec3(0, 0.2, 0.1);
-        triangles.push_back({a, b, c, 0.5 * (a + b), i % 4 ? 3.0 : 0.0});
-    }
+    const std::vector<TriangleGeometry> triangles = sample_triangles(50, glm::dvec3(0.0));
     for (const std::string& name : error_measure_names()) {
         auto measure = make_error_measure(name);
         std::vector<double> errors(triangles.size()), alone(triangles.size()),
@@ -223,12 +230,8 @@ TEST(ErrorMeasure, midpoint_values_are_f_at_the_base_midpoints) {
 TEST(ErrorMeasure, batch_matches_one_at_a_time) {
     auto field = test::compile_field("x^2+y^2+z^2+2cos(2x)=5");
     auto e = field->make_evaluator();
-    std::vector<TriangleGeometry> triangles;
-    for (int i = 0; i < 100; ++i) {
-        const glm::dvec3 a(std::sin(i), std::cos(i), 1.5), b = a + glm::dvec3(0.3, 0.1, 0),
-                                                           c = a + glm::dvec3(0, 0.2, 0.1);
-        triangles.push_back({a, b, c, 0.5 * (a + b) + glm::dvec3(0, 0, 0.01), i % 4 ? 3.0 : 0.0});
-    }
+    const std::vector<TriangleGeometry> triangles =
+        sample_triangles(100, glm::dvec3(0.0, 0.0, 0.01));
     for (const std::string& name : error_measure_names()) {
         auto measure = make_error_measure(name);
         ASSERT_TRUE(measure);
