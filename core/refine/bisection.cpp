@@ -233,7 +233,7 @@ void Refiner::Impl::bisect(std::uint32_t t, std::uint32_t n) {
                                               vertices_[T.v[(T.base + 1) % 3]].position, bounds_)
                                   : 0;
         M.alive = true;
-        delta_.add_vertex(delta_vertex(m));
+        delta_.add_vertex(M.id, m);
     }
     remove_leaf(t);
     if (n != kNone) remove_leaf(n);

@@ -107,7 +107,7 @@ void Refiner::Impl::refresh_vertices(std::span<const std::uint32_t> items) {
         }
         V.on_surface = p.on_surface();
         V.version = version_;
-        delta_.move_vertex(delta_vertex(items[i]));
+        delta_.move_vertex(V.id, items[i]);
     }
     counters_.refreshed_vertices += items.size();
 }

@@ -120,7 +120,7 @@ Refiner::Impl::Impl(std::shared_ptr<const Field> field, const Mesh& first_mesh,
     blocked_queue_ = make_queue(settings_.queue, QueueOrder::HighestFirst, settings_.buckets);
     merge_queue_ = make_queue(settings_.queue, QueueOrder::LowestFirst, settings_.buckets);
     load(first_mesh);
-    delta_.take();  // the first mesh is the snapshot, not a change
+    delta_.clear();  // the first mesh is the snapshot, not a change
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -166,7 +166,7 @@ void Refiner::Impl::load(const Mesh& input) {
         V.scale = std::numeric_limits<double>::infinity();
         V.version = version_;
         V.alive = true;
-        delta_.add_vertex(delta_vertex(slot));
+        delta_.add_vertex(V.id, slot);
     }
     // Triangle slots are allocated in input order, so slot t' of input triangle t is known.
     std::vector<std::uint32_t> tri_slot(mesh.triangles.size());
@@ -264,6 +264,11 @@ DeltaTriangle Refiner::Impl::delta_triangle(std::uint32_t t) const {
     return {T.id, {vertices_[T.v[0]].id, vertices_[T.v[1]].id, vertices_[T.v[2]].id}};
 }
 
+MeshDelta Refiner::Impl::take_delta() {
+    return delta_.take([this](std::uint32_t v) { return delta_vertex(v); },
+                       [this](std::uint32_t t) { return delta_triangle(t); });
+}
+
 DeltaVertex Refiner::Impl::delta_vertex(std::uint32_t v) const {
     const Vertex& V = vertices_[v];
     return {V.id, V.position, V.normal};
@@ -309,7 +314,7 @@ StepResult Refiner::Impl::step(const StepBudget& budget, bool take) {
     result.restarted = std::exchange(restarted_, false);
     result.splits = counters_.splits - before.splits;
     result.merges = counters_.merges - before.merges;
-    if (take) result.delta = delta_.take();
+    if (take) result.delta = take_delta();
     return result;
 }
 

@@ -203,7 +203,7 @@ class Refiner::Impl {
     const RefineCounters& counters() const { return counters_; }
     RefinedMesh mesh() const;
     MeshDelta snapshot() const;
-    MeshDelta take_delta() { return delta_.take(); }
+    MeshDelta take_delta();
 
   private:
     // --- structure
@@ -345,7 +345,7 @@ class Refiner::Impl {
 
     std::uint32_t next_vertex_id_ = 0;
     std::uint32_t next_triangle_id_ = 0;
-    DeltaBuilder delta_;
+    SlotDeltaLog delta_;
     RefineCounters counters_;
     SplitPlan plan_;  // scratch
     std::vector<std::uint32_t> exchange_merges_;

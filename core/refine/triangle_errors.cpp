@@ -207,7 +207,7 @@ void Refiner::Impl::add_leaf(std::uint32_t t) {
     total_error_.add(error);
     PriorityQueue& queue = splittable(t) ? *split_queue_ : *blocked_queue_;
     queue.insert(t, error);
-    delta_.add_triangle(delta_triangle(t));
+    delta_.add_triangle(T.id, t);
 }
 
 void Refiner::Impl::remove_leaf(std::uint32_t t) {
