@@ -119,10 +119,12 @@ EdgeSurvey survey_edges(Evaluator& evaluator, CornerCache& corners, const Lattic
 /// Whether no closed curve of the surface can hide inside either face of `box` orthogonal to
 /// `axis`: f has no zero on the face, or is monotone along one of the face's axes.
 bool faces_are_simple(Evaluator& evaluator, const Box& box, int axis) {
-    for (double side : {box.lo[axis], box.hi[axis]}) {
-        Box face = box;
-        face.lo[axis] = face.hi[axis] = side;
-        const IntervalGradient enclosure = evaluator.interval_gradient(face);
+    Box faces[2] = {box, box};
+    faces[0].hi[axis] = box.lo[axis];
+    faces[1].lo[axis] = box.hi[axis];
+    IntervalGradient enclosures[2];
+    evaluator.interval_gradients(faces, enclosures);  // one batch (about the cost of one face)
+    for (const IntervalGradient& enclosure : enclosures) {
         if (enclosure.value.value.excludes_zero()) continue;
         const unsigned in_face = monotone_axes(enclosure.gradient) & ~(1u << axis);
         if (in_face == 0) return false;

@@ -168,8 +168,15 @@ class RootCounter {
         }
         const glm::dvec3 mid = piece.at(0.5);
         const double fm = evaluator_.value(mid);
-        visit({piece.a, mid, piece.fa, fm, piece.axis});
-        visit({mid, piece.b, fm, piece.fb, piece.axis});
+        // Both halves' enclosures in one batch (the evaluator's narrow vector kernel costs about
+        // one box), though the second is not needed once the first holds `limit` roots.
+        const EdgeSegment halves[2] = {{piece.a, mid, piece.fa, fm, piece.axis},
+                                       {mid, piece.b, fm, piece.fb, piece.axis}};
+        const Box boxes[2] = {halves[0].box(), halves[1].box()};
+        IntervalGradient enclosures[2];
+        evaluator_.interval_gradients(boxes, enclosures);
+        visit(halves[0], &enclosures[0]);
+        visit(halves[1], &enclosures[1]);
     }
 
     Evaluator& evaluator_;
