@@ -95,7 +95,7 @@ class TapeEvaluator final : public Evaluator {
         std::vector<Choice> choices;
         std::shared_ptr<const TapeProgram> program;
     };
-    static constexpr std::size_t kSimplifications = 16;
+    static constexpr std::size_t kSimplifications = 64;
     std::vector<Simplification> simplifications_;
     std::size_t next_simplification_ = 0;
 };

@@ -36,7 +36,7 @@ namespace {
 /// Root counting on a cell's edge bisects down to a quarter of the finest regular level's step.
 constexpr int kSubLatticeBisections = 2;
 /// Cells per worker task (consecutive in octree order, so that they share most ancestors).
-constexpr std::size_t kCellsPerTask = 64;
+constexpr std::size_t kCellsPerTask = 256;
 /// Cells per round of tasks handed to the pool.
 constexpr std::size_t kCellsPerRound = 2048;
 
