@@ -71,8 +71,13 @@ struct EdgeSurvey {
     bool false_crossing = false;
 };
 
+/// Counts the roots on the cell's 12 edges. `monotone`: the axes along which f is continuous and
+/// monotone on the whole cell (monotone_axes of its enclosure, or 0): an edge along one of them
+/// holds one root if its ends differ in sign, else none, as its own enclosure (inside the
+/// cell's) would prove, so it needs no evaluation.
 EdgeSurvey survey_edges(Evaluator& evaluator, CornerCache& corners, const Lattice& lattice,
-                        const CellId& cell, int max_bisections, EdgeRootCounts* known) {
+                        const CellId& cell, int max_bisections, EdgeRootCounts* known,
+                        unsigned monotone) {
     std::array<EdgeSegment, 12> edges;
     std::array<std::uint64_t, 12> keys;
     std::array<std::optional<EdgeRootCount>, 12> counted;
@@ -85,6 +90,10 @@ EdgeSurvey survey_edges(Evaluator& evaluator, CornerCache& corners, const Lattic
         edges[e] = {lattice.point(p0), lattice.point(p1), corners.value(p0), corners.value(p1),
                     e / 4};
         keys[e] = cell_edge_key(p0, e / 4, cell.depth);
+        if ((monotone >> (e / 4)) & 1u) {
+            counted[e] = EdgeRootCount{is_inside(edges[e].fa) != is_inside(edges[e].fb)};
+            continue;
+        }
         if (known != nullptr) {
             const auto it = known->find(keys[e]);
             if (it != known->end()) counted[e] = it->second;
@@ -174,7 +183,7 @@ CellVerdict classify_cell(Evaluator& evaluator, CornerCache& corners, const Latt
         !enclosure.value.maybe_discontinuous && !enclosure.value.maybe_undefined;
     if (!continuous) {
         return classify_discontinuous(
-            survey_edges(evaluator, corners, lattice, cell, max_bisections, edges));
+            survey_edges(evaluator, corners, lattice, cell, max_bisections, edges, 0));
     }
     if (satisfies_gradient_cone(enclosure.gradient)) return CellVerdict::Leaf;
 
@@ -187,7 +196,7 @@ CellVerdict classify_cell(Evaluator& evaluator, CornerCache& corners, const Latt
         if (!faces_are_simple(evaluator, box, axis)) return CellVerdict::Split;
     }
     const EdgeSurvey survey =
-        survey_edges(evaluator, corners, lattice, cell, max_bisections, edges);
+        survey_edges(evaluator, corners, lattice, cell, max_bisections, edges, monotone);
     return survey.max_roots <= 1 ? CellVerdict::Leaf : CellVerdict::Split;
 }
 
