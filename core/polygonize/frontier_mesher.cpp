@@ -245,9 +245,25 @@ CrossingRoots crossings_used(const std::vector<LeafMeshes>& parts, const Lattice
     return result;
 }
 
-/// Finds the roots of crossings order[begin, end) of `crossings`, the evaluator specialised to
-/// each group in turn. (Specialisation does not change any evaluation's result: the roots are
-/// those of the whole tape.)
+/// Finds the roots of crossings order[first, last) of `crossings`, all of one group, with the
+/// evaluator specialised to the group's cell, in lockstep batches (find_edge_roots).
+/// (Specialisation does not change any evaluation's result: the roots are those of the whole
+/// tape.)
+void find_group_roots(Evaluator& evaluator, const Lattice& lattice, const ValueMap& values,
+                      CrossingRoots& crossings, std::size_t first, std::size_t last) {
+    std::vector<EdgeSegment> segments;
+    segments.reserve(last - first);
+    for (std::size_t k = first; k < last; ++k)
+        segments.push_back(crossing_segment(values, lattice, crossings.keys[crossings.order[k]]));
+    std::vector<EdgeRoot> roots(segments.size());
+    evaluator.push(lattice.cell_box(crossings.groups[crossings.order[first]]));
+    find_edge_roots(evaluator, segments, roots);
+    evaluator.pop();
+    for (std::size_t k = first; k < last; ++k)
+        crossings.roots[crossings.order[k]] = roots[k - first];
+}
+
+/// Finds the roots of crossings order[begin, end) of `crossings`, group by group.
 void find_roots(EvaluatorPool& workers, const Lattice& lattice, const ValueMap& values,
                 CrossingRoots& crossings, std::size_t begin, std::size_t end,
                 const WorkBudget& budget) {
@@ -255,18 +271,14 @@ void find_roots(EvaluatorPool& workers, const Lattice& lattice, const ValueMap& 
                      [&](std::size_t task, CountingEvaluator& evaluator) {
                          const std::size_t first = begin + task * kEdgesPerTask;
                          const std::size_t last = std::min(end, first + kEdgesPerTask);
-                         std::optional<CellId> pushed;
-                         for (std::size_t k = first; k < last && !budget.cancelled(); ++k) {
-                             const std::size_t i = crossings.order[k];
-                             if (pushed != crossings.groups[i]) {
-                                 if (pushed) evaluator.pop();
-                                 pushed = crossings.groups[i];
-                                 evaluator.push(lattice.cell_box(*pushed));
-                             }
-                             crossings.roots[i] = find_edge_root(
-                                 evaluator, crossing_segment(values, lattice, crossings.keys[i]));
+                         for (std::size_t k = first; k < last && !budget.cancelled();) {
+                             const CellId& group = crossings.groups[crossings.order[k]];
+                             std::size_t run = k + 1;
+                             while (run < last && crossings.groups[crossings.order[run]] == group)
+                                 ++run;
+                             find_group_roots(evaluator, lattice, values, crossings, k, run);
+                             k = run;
                          }
-                         if (pushed) evaluator.pop();
                      });
 }
 
