@@ -246,18 +246,24 @@ CrossingRoots crossings_used(const std::vector<LeafMeshes>& parts, const Lattice
 }
 
 /// Finds the roots of crossings order[first, last) of `crossings`, all of one group, with the
-/// evaluator specialised to the group's cell, in lockstep batches (find_edge_roots).
-/// (Specialisation does not change any evaluation's result: the roots are those of the whole
-/// tape.)
+/// evaluator specialised to the group's cell, in lockstep batches (find_edge_roots), the budget's
+/// cancellation checked between batches. (Specialisation does not change any evaluation's
+/// result: the roots are those of the whole tape.)
 void find_group_roots(Evaluator& evaluator, const Lattice& lattice, const ValueMap& values,
-                      CrossingRoots& crossings, std::size_t first, std::size_t last) {
+                      CrossingRoots& crossings, std::size_t first, std::size_t last,
+                      const WorkBudget& budget) {
     std::vector<EdgeSegment> segments;
     segments.reserve(last - first);
     for (std::size_t k = first; k < last; ++k)
         segments.push_back(crossing_segment(values, lattice, crossings.keys[crossings.order[k]]));
     std::vector<EdgeRoot> roots(segments.size());
     evaluator.push(lattice.cell_box(crossings.groups[crossings.order[first]]));
-    find_edge_roots(evaluator, segments, roots);
+    constexpr std::size_t kRootsBetweenChecks = 16;
+    for (std::size_t i = 0; i < segments.size() && !budget.cancelled(); i += kRootsBetweenChecks) {
+        const std::size_t n = std::min(kRootsBetweenChecks, segments.size() - i);
+        find_edge_roots(evaluator, std::span(segments).subspan(i, n),
+                        std::span(roots).subspan(i, n));
+    }
     evaluator.pop();
     for (std::size_t k = first; k < last; ++k)
         crossings.roots[crossings.order[k]] = roots[k - first];
@@ -267,19 +273,18 @@ void find_group_roots(Evaluator& evaluator, const Lattice& lattice, const ValueM
 void find_roots(EvaluatorPool& workers, const Lattice& lattice, const ValueMap& values,
                 CrossingRoots& crossings, std::size_t begin, std::size_t end,
                 const WorkBudget& budget) {
-    workers.for_each(task_count(end - begin, kEdgesPerTask),
-                     [&](std::size_t task, CountingEvaluator& evaluator) {
-                         const std::size_t first = begin + task * kEdgesPerTask;
-                         const std::size_t last = std::min(end, first + kEdgesPerTask);
-                         for (std::size_t k = first; k < last && !budget.cancelled();) {
-                             const CellId& group = crossings.groups[crossings.order[k]];
-                             std::size_t run = k + 1;
-                             while (run < last && crossings.groups[crossings.order[run]] == group)
-                                 ++run;
-                             find_group_roots(evaluator, lattice, values, crossings, k, run);
-                             k = run;
-                         }
-                     });
+    workers.for_each(task_count(end - begin, kEdgesPerTask), [&](std::size_t task,
+                                                                 CountingEvaluator& evaluator) {
+        const std::size_t first = begin + task * kEdgesPerTask;
+        const std::size_t last = std::min(end, first + kEdgesPerTask);
+        for (std::size_t k = first; k < last && !budget.cancelled();) {
+            const CellId& group = crossings.groups[crossings.order[k]];
+            std::size_t run = k + 1;
+            while (run < last && crossings.groups[crossings.order[run]] == group) ++run;
+            find_group_roots(evaluator, lattice, values, crossings, k, run, budget);
+            k = run;
+        }
+    });
 }
 
 /// The mesh: a vertex per crossing that is a root, then the leaves' own vertices; triangles
