@@ -53,6 +53,27 @@ double CornerCache::value(const glm::u32vec3& p) {
     return it->second;
 }
 
+void CornerCache::prefetch(std::span<const glm::u32vec3> points) {
+    missing_.clear();
+    x_.clear();
+    y_.clear();
+    z_.clear();
+    for (const glm::u32vec3& p : points) {
+        const std::uint64_t key = Lattice::key(p);
+        if (known_ != nullptr && known_->contains(key)) continue;
+        if (!values_.try_emplace(key, 0.0).second) continue;  // known, or listed already
+        missing_.push_back(key);
+        const glm::dvec3 q = lattice_.point(p);
+        x_.push_back(q.x);
+        y_.push_back(q.y);
+        z_.push_back(q.z);
+    }
+    if (missing_.empty()) return;
+    results_.resize(missing_.size());
+    evaluator_.values({x_, y_, z_}, results_);
+    for (std::size_t i = 0; i < missing_.size(); ++i) values_[missing_[i]] = results_[i];
+}
+
 namespace {
 
 /// Lower bound of the product of two independent copies of x.

@@ -125,12 +125,28 @@ class CellClassifier {
         }
         enclosures_.resize(cells.size());
         evaluator_.interval_gradients(boxes_, enclosures_);
+        prefetch_corners(cells);
         edges_.clear();  // the siblings share edges, whose root counts edges_ keeps
         for (std::size_t i = 0; i < cells.size(); ++i) {
             if (i > 0 && stop()) return i;
             out[i] = outcome(cells[i], enclosures_[i]);
         }
         return cells.size();
+    }
+
+    /// The corners and centres of the siblings whose enclosure of f holds 0 (most of them
+    /// need those values next: the mean value form, the edges, the feature search; the mesher the
+    /// corners of every leaf), evaluated in one batch rather than one by one.
+    void prefetch_corners(std::span<const CellId> cells) {
+        points_.clear();
+        for (std::size_t i = 0; i < cells.size(); ++i) {
+            if (enclosures_[i].value.value.excludes_zero()) continue;
+            for (int c = 0; c < 8; ++c) points_.push_back(lattice_.corner(cells[i], c));
+            if (cells[i].depth < lattice_.max_depth())
+                points_.push_back(lattice_.origin(cells[i]) +
+                                  glm::u32vec3(lattice_.span(cells[i].depth) / 2));
+        }
+        corners_.prefetch(points_);
     }
 
     static CellOutcome coarse_outcome(const IntervalValue& value) {
@@ -239,6 +255,7 @@ class CellClassifier {
     EdgeRootCounts edges_;      // of the siblings being classified (classify_siblings)
     std::vector<CellId> path_;  // path_[k]: the pushed ancestor at depth k
     std::vector<Box> boxes_;
+    std::vector<glm::u32vec3> points_;
     std::vector<IntervalValue> values_;
     std::vector<IntervalGradient> enclosures_;
 };
