@@ -18,7 +18,7 @@ namespace {
 
 using namespace lanes;
 using lanes::nonfinite;  // overloaded below for intervals
-static_assert(kIntervalLanes % kChunk == 0);
+static_assert(kIntervalLanes % kChunk == 0 && kIntervalFewLanes == kChunk);
 
 /// An interval over all lanes.
 template <class D>
@@ -675,6 +675,12 @@ std::size_t run_interval_steps(std::span<const BatchStep> steps, IntervalRegiste
 }
 
 ISOMESH_VECTOR_CLONES std::size_t run_interval_steps(std::span<const BatchStep> steps,
+                                                     IntervalRegister<kIntervalFewLanes>* registers,
+                                                     Choice* choices, std::size_t choice_count) {
+    return run<kIntervalFewLanes, IntervalStep>(steps, registers, choices, choice_count);
+}
+
+ISOMESH_VECTOR_CLONES std::size_t run_interval_steps(std::span<const BatchStep> steps,
                                                      IntervalRegister<kIntervalLanes>* registers,
                                                      Choice* choices, std::size_t choice_count) {
     return run<kIntervalLanes, IntervalStep>(steps, registers, choices, choice_count);
@@ -683,6 +689,12 @@ ISOMESH_VECTOR_CLONES std::size_t run_interval_steps(std::span<const BatchStep> 
 std::size_t run_gradient_steps(std::span<const BatchStep> steps, GradientRegister<1>* registers,
                                Choice* choices, std::size_t choice_count) {
     return run<1, GradientStep>(steps, registers, choices, choice_count);
+}
+
+ISOMESH_VECTOR_CLONES std::size_t run_gradient_steps(std::span<const BatchStep> steps,
+                                                     GradientRegister<kIntervalFewLanes>* registers,
+                                                     Choice* choices, std::size_t choice_count) {
+    return run<kIntervalFewLanes, GradientStep>(steps, registers, choices, choice_count);
 }
 
 ISOMESH_VECTOR_CLONES std::size_t run_gradient_steps(std::span<const BatchStep> steps,

@@ -28,6 +28,9 @@ namespace isomesh {
 
 /// Boxes per batch of the interval kernels: an octree cell's children.
 inline constexpr std::size_t kIntervalLanes = 8;
+/// Boxes per batch of the narrower kernels, for a few boxes (a cell's faces, an edge's halves, the
+/// last of a cell's 12 edges): one vector of lanes, at about the cost of one box.
+inline constexpr std::size_t kIntervalFewLanes = 4;
 
 /// IntervalValue's flags as bits, one integer per lane.
 inline constexpr std::int64_t kMaybeDiscontinuous = 1;
@@ -62,10 +65,16 @@ struct alignas(8 * W) GradientRegister {
 std::size_t run_interval_steps(std::span<const BatchStep> steps, IntervalRegister<1>* registers,
                                Choice* choices, std::size_t choice_count);
 std::size_t run_interval_steps(std::span<const BatchStep> steps,
+                               IntervalRegister<kIntervalFewLanes>* registers, Choice* choices,
+                               std::size_t choice_count);
+std::size_t run_interval_steps(std::span<const BatchStep> steps,
                                IntervalRegister<kIntervalLanes>* registers, Choice* choices,
                                std::size_t choice_count);
 std::size_t run_gradient_steps(std::span<const BatchStep> steps, GradientRegister<1>* registers,
                                Choice* choices, std::size_t choice_count);
+std::size_t run_gradient_steps(std::span<const BatchStep> steps,
+                               GradientRegister<kIntervalFewLanes>* registers, Choice* choices,
+                               std::size_t choice_count);
 std::size_t run_gradient_steps(std::span<const BatchStep> steps,
                                GradientRegister<kIntervalLanes>* registers, Choice* choices,
                                std::size_t choice_count);

@@ -170,23 +170,31 @@ IntervalGradient TapeEvaluator::interval_gradient(const Box& box) {
 }
 
 void TapeEvaluator::intervals(std::span<const Box> boxes, std::span<IntervalValue> out) {
-    evaluate_batch(boxes, out, interval_registers_, interval_lane_registers_);
+    evaluate_batch(boxes, out, interval_registers_, interval_few_registers_,
+                   interval_lane_registers_);
 }
 
 void TapeEvaluator::interval_gradients(std::span<const Box> boxes,
                                        std::span<IntervalGradient> out) {
-    evaluate_batch(boxes, out, gradient_registers_, gradient_lane_registers_);
+    evaluate_batch(boxes, out, gradient_registers_, gradient_few_registers_,
+                   gradient_lane_registers_);
 }
 
-template <class Result, class Narrow, class Wide>
+template <class Result, class Narrow, class Few, class Wide>
 void TapeEvaluator::evaluate_batch(std::span<const Box> boxes, std::span<Result> out,
-                                   Narrow& narrow, Wide& wide) {
+                                   Narrow& narrow, Few& few, Wide& wide) {
     assert(boxes.size() == out.size());
     if (boxes.size() == 1) return evaluate_boxes<1>(boxes, out, narrow);
+    // Whole batches of kIntervalLanes, the rest (at most kIntervalFewLanes) in a narrower one: a
+    // cell's 12 edges as 8 + 4 lanes rather than 8 + 8.
     for (std::size_t start = 0; start < boxes.size(); start += kIntervalLanes) {
         const std::size_t count = std::min(kIntervalLanes, boxes.size() - start);
-        evaluate_boxes<kIntervalLanes>(boxes.subspan(start, count), out.subspan(start, count),
-                                       wide);
+        if (count <= kIntervalFewLanes)
+            evaluate_boxes<kIntervalFewLanes>(boxes.subspan(start, count),
+                                              out.subspan(start, count), few);
+        else
+            evaluate_boxes<kIntervalLanes>(boxes.subspan(start, count), out.subspan(start, count),
+                                           wide);
     }
 }
 

@@ -47,8 +47,8 @@ class TapeEvaluator final : public Evaluator {
     template <std::size_t W, class Register, class Result>
     void evaluate_boxes(std::span<const Box> boxes, std::span<Result> out,
                         std::vector<Register>& registers);
-    template <class Result, class Narrow, class Wide>
-    void evaluate_batch(std::span<const Box> boxes, std::span<Result> out, Narrow& narrow,
+    template <class Result, class Narrow, class Few, class Wide>
+    void evaluate_batch(std::span<const Box> boxes, std::span<Result> out, Narrow& narrow, Few& few,
                         Wide& wide);
     /// The choices interval evaluation proves on `box` with the top program: those of the last
     /// batch when it held the box, else from a new evaluation.
@@ -76,10 +76,12 @@ class TapeEvaluator final : public Evaluator {
     // Point-gradient kernels, one point or kPointLanes at a time.
     std::vector<PointRegister<1>> gradient_point_registers_;
     std::vector<PointRegister<kPointLanes>> gradient_lane_point_registers_;
-    // Interval kernels, one box or kIntervalLanes at a time.
+    // Interval kernels, one box, kIntervalFewLanes or kIntervalLanes at a time.
     std::vector<IntervalRegister<1>> interval_registers_;
+    std::vector<IntervalRegister<kIntervalFewLanes>> interval_few_registers_;
     std::vector<IntervalRegister<kIntervalLanes>> interval_lane_registers_;
     std::vector<GradientRegister<1>> gradient_registers_;
+    std::vector<GradientRegister<kIntervalFewLanes>> gradient_few_registers_;
     std::vector<GradientRegister<kIntervalLanes>> gradient_lane_registers_;
     // The last boxes evaluated, with the program and the choices (lane-major) of each.
     std::shared_ptr<const TapeProgram> choices_program_;
@@ -93,7 +95,7 @@ class TapeEvaluator final : public Evaluator {
         std::vector<Choice> choices;
         std::shared_ptr<const TapeProgram> program;
     };
-    static constexpr std::size_t kSimplifications = 16;
+    static constexpr std::size_t kSimplifications = 64;
     std::vector<Simplification> simplifications_;
     std::size_t next_simplification_ = 0;
 };

@@ -53,6 +53,27 @@ double CornerCache::value(const glm::u32vec3& p) {
     return it->second;
 }
 
+void CornerCache::prefetch(std::span<const glm::u32vec3> points) {
+    missing_.clear();
+    x_.clear();
+    y_.clear();
+    z_.clear();
+    for (const glm::u32vec3& p : points) {
+        const std::uint64_t key = Lattice::key(p);
+        if (known_ != nullptr && known_->contains(key)) continue;
+        if (!values_.try_emplace(key, 0.0).second) continue;  // known, or listed already
+        missing_.push_back(key);
+        const glm::dvec3 q = lattice_.point(p);
+        x_.push_back(q.x);
+        y_.push_back(q.y);
+        z_.push_back(q.z);
+    }
+    if (missing_.empty()) return;
+    results_.resize(missing_.size());
+    evaluator_.values({x_, y_, z_}, results_);
+    for (std::size_t i = 0; i < missing_.size(); ++i) values_[missing_[i]] = results_[i];
+}
+
 namespace {
 
 /// Lower bound of the product of two independent copies of x.
@@ -71,8 +92,13 @@ struct EdgeSurvey {
     bool false_crossing = false;
 };
 
+/// Counts the roots on the cell's 12 edges. `monotone`: the axes along which f is continuous and
+/// monotone on the whole cell (monotone_axes of its enclosure, or 0): an edge along one of them
+/// holds one root if its ends differ in sign, else none, as its own enclosure (inside the
+/// cell's) would prove, so it needs no evaluation.
 EdgeSurvey survey_edges(Evaluator& evaluator, CornerCache& corners, const Lattice& lattice,
-                        const CellId& cell, int max_bisections, EdgeRootCounts* known) {
+                        const CellId& cell, int max_bisections, EdgeRootCounts* known,
+                        unsigned monotone) {
     std::array<EdgeSegment, 12> edges;
     std::array<std::uint64_t, 12> keys;
     std::array<std::optional<EdgeRootCount>, 12> counted;
@@ -85,6 +111,10 @@ EdgeSurvey survey_edges(Evaluator& evaluator, CornerCache& corners, const Lattic
         edges[e] = {lattice.point(p0), lattice.point(p1), corners.value(p0), corners.value(p1),
                     e / 4};
         keys[e] = cell_edge_key(p0, e / 4, cell.depth);
+        if ((monotone >> (e / 4)) & 1u) {
+            counted[e] = EdgeRootCount{is_inside(edges[e].fa) != is_inside(edges[e].fb)};
+            continue;
+        }
         if (known != nullptr) {
             const auto it = known->find(keys[e]);
             if (it != known->end()) counted[e] = it->second;
@@ -119,10 +149,12 @@ EdgeSurvey survey_edges(Evaluator& evaluator, CornerCache& corners, const Lattic
 /// Whether no closed curve of the surface can hide inside either face of `box` orthogonal to
 /// `axis`: f has no zero on the face, or is monotone along one of the face's axes.
 bool faces_are_simple(Evaluator& evaluator, const Box& box, int axis) {
-    for (double side : {box.lo[axis], box.hi[axis]}) {
-        Box face = box;
-        face.lo[axis] = face.hi[axis] = side;
-        const IntervalGradient enclosure = evaluator.interval_gradient(face);
+    Box faces[2] = {box, box};
+    faces[0].hi[axis] = box.lo[axis];
+    faces[1].lo[axis] = box.hi[axis];
+    IntervalGradient enclosures[2];
+    evaluator.interval_gradients(faces, enclosures);  // one batch (about the cost of one face)
+    for (const IntervalGradient& enclosure : enclosures) {
         if (enclosure.value.value.excludes_zero()) continue;
         const unsigned in_face = monotone_axes(enclosure.gradient) & ~(1u << axis);
         if (in_face == 0) return false;
@@ -172,7 +204,7 @@ CellVerdict classify_cell(Evaluator& evaluator, CornerCache& corners, const Latt
         !enclosure.value.maybe_discontinuous && !enclosure.value.maybe_undefined;
     if (!continuous) {
         return classify_discontinuous(
-            survey_edges(evaluator, corners, lattice, cell, max_bisections, edges));
+            survey_edges(evaluator, corners, lattice, cell, max_bisections, edges, 0));
     }
     if (satisfies_gradient_cone(enclosure.gradient)) return CellVerdict::Leaf;
 
@@ -185,7 +217,7 @@ CellVerdict classify_cell(Evaluator& evaluator, CornerCache& corners, const Latt
         if (!faces_are_simple(evaluator, box, axis)) return CellVerdict::Split;
     }
     const EdgeSurvey survey =
-        survey_edges(evaluator, corners, lattice, cell, max_bisections, edges);
+        survey_edges(evaluator, corners, lattice, cell, max_bisections, edges, monotone);
     return survey.max_roots <= 1 ? CellVerdict::Leaf : CellVerdict::Split;
 }
 

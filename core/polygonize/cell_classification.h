@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
+#include <vector>
 
 #include "eval/evaluator.h"
 #include "polygonize/edge_roots.h"
@@ -19,6 +21,9 @@ class CornerCache {
         : evaluator_(evaluator), lattice_(lattice), known_(known) {}
 
     double value(const glm::u32vec3& p);
+    /// Evaluates, in one batch (Evaluator::values, bit for bit value()'s results), the points
+    /// of `points` not known yet, so that value() finds them.
+    void prefetch(std::span<const glm::u32vec3> points);
     /// The values this cache evaluated (not those of `known`).
     ValueMap& values() { return values_; }
 
@@ -27,6 +32,8 @@ class CornerCache {
     const Lattice& lattice_;
     const ValueMap* known_;
     ValueMap values_;
+    std::vector<std::uint64_t> missing_;
+    std::vector<double> x_, y_, z_, results_;
 };
 
 enum class CellVerdict {

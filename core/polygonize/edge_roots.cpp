@@ -20,9 +20,11 @@
 #include "polygonize/edge_roots.h"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <glm/geometric.hpp>
 
@@ -52,11 +54,6 @@ EdgeRoot make_root(const EdgeSegment& edge, const Sample& s, bool found) {
     return {found, edge.at(s.t), s.value, s.gradient};
 }
 
-Sample sample(Evaluator& evaluator, const EdgeSegment& edge, double t) {
-    const ValueGradient vg = evaluator.value_gradient(edge.at(t));
-    return {t, vg.value, vg.gradient};
-}
-
 /// The smaller of |fa| and |fb| over the finite ones (infinity when neither is finite).
 double end_magnitude(const EdgeSegment& edge) {
     double m = std::numeric_limits<double>::infinity();
@@ -76,46 +73,123 @@ bool is_root(const EdgeSegment& edge, const Sample& best, bool newton_converged)
 
 }  // namespace
 
-EdgeRoot find_edge_root(Evaluator& evaluator, const EdgeSegment& edge) {
-    assert(is_inside(edge.fa) != is_inside(edge.fb));
-    if (edge.fa == 0.0) return make_root(edge, sample(evaluator, edge, 0.0), true);
-    if (edge.fb == 0.0) return make_root(edge, sample(evaluator, edge, 1.0), true);
+namespace {
 
-    const bool a_inside = is_inside(edge.fa);
-    const glm::dvec3 direction = edge.b - edge.a;
-    double ta = 0.0, tb = 1.0;
-    // First guess: the linear interpolation of the ends (the classic Marching Cubes vertex).
-    double t = 0.5;
-    if (std::isfinite(edge.fa) && std::isfinite(edge.fb)) {
-        const double guess = edge.fa / (edge.fa - edge.fb);
-        if (guess > 0.0 && guess < 1.0) t = guess;
-    }
-    double previous_step = 1.0;
-    Sample best{0.0, std::numeric_limits<double>::infinity(), glm::dvec3(0.0)};
-    bool newton_converged = false;
-    for (int iteration = 0; iteration < kMaxIterations; ++iteration) {
-        const Sample s = sample(evaluator, edge, t);
-        if (!(std::abs(s.value) >= std::abs(best.value))) best = s;  // NaN never replaces
-        if (s.value == 0.0 || newton_converged) break;
-        (is_inside(s.value) == a_inside ? ta : tb) = t;
-
-        const double slope = glm::dot(s.gradient, direction);
-        const double step = s.value / slope;
-        const double newton = t - step;
-        if (std::isfinite(newton) && newton > ta && newton < tb &&
-            std::abs(step) <= 0.5 * previous_step) {
-            previous_step = std::abs(step);
-            newton_converged = previous_step <= kStepTolerance;
-            t = newton;
-        } else {
-            const double mid = 0.5 * (ta + tb);
-            // The bracket cannot shrink once its ends are adjacent doubles along the edge.
-            if (edge.at(mid) == edge.at(ta) || edge.at(mid) == edge.at(tb)) break;
-            previous_step = 0.5 * (tb - ta);
-            t = mid;
+/// One edge's safeguarded Newton iteration, a sample at a time, so that several edges can run in
+/// lockstep (find_edge_roots): next() is where f is wanted, take() what it is there.
+class RootSearch {
+  public:
+    explicit RootSearch(const EdgeSegment& edge) : edge_(&edge) {
+        assert(is_inside(edge.fa) != is_inside(edge.fb));
+        if (edge.fa == 0.0 || edge.fb == 0.0) {
+            // A root exactly at an end: that end, with f and its gradient there.
+            at_end_ = true;
+            t_ = edge.fa == 0.0 ? 0.0 : 1.0;
+            return;
+        }
+        a_inside_ = is_inside(edge.fa);
+        // First guess: the linear interpolation of the ends (the classic Marching Cubes vertex).
+        if (std::isfinite(edge.fa) && std::isfinite(edge.fb)) {
+            const double guess = edge.fa / (edge.fa - edge.fb);
+            if (guess > 0.0 && guess < 1.0) t_ = guess;
         }
     }
-    return make_root(edge, best, is_root(edge, best, newton_converged));
+
+    bool done() const { return done_; }
+    glm::dvec3 next() const { return edge_->at(t_); }
+
+    void take(const ValueGradient& vg) {
+        const Sample s{t_, vg.value, vg.gradient};
+        if (at_end_) {
+            best_ = s;
+            done_ = true;
+            return;
+        }
+        if (!(std::abs(s.value) >= std::abs(best_.value))) best_ = s;  // NaN never replaces
+        if (s.value == 0.0 || newton_converged_) {
+            done_ = true;
+            return;
+        }
+        (is_inside(s.value) == a_inside_ ? ta_ : tb_) = t_;
+
+        const double slope = glm::dot(s.gradient, edge_->b - edge_->a);
+        const double step = s.value / slope;
+        const double newton = t_ - step;
+        if (std::isfinite(newton) && newton > ta_ && newton < tb_ &&
+            std::abs(step) <= 0.5 * previous_step_) {
+            previous_step_ = std::abs(step);
+            newton_converged_ = previous_step_ <= kStepTolerance;
+            t_ = newton;
+        } else {
+            const double mid = 0.5 * (ta_ + tb_);
+            // The bracket cannot shrink once its ends are adjacent doubles along the edge.
+            if (edge_->at(mid) == edge_->at(ta_) || edge_->at(mid) == edge_->at(tb_)) {
+                done_ = true;
+                return;
+            }
+            previous_step_ = 0.5 * (tb_ - ta_);
+            t_ = mid;
+        }
+        done_ = ++iteration_ >= kMaxIterations;
+    }
+
+    EdgeRoot root() const {
+        return make_root(*edge_, best_, at_end_ || is_root(*edge_, best_, newton_converged_));
+    }
+
+  private:
+    const EdgeSegment* edge_;
+    bool at_end_ = false;
+    bool a_inside_ = false;
+    double ta_ = 0.0, tb_ = 1.0, t_ = 0.5;
+    double previous_step_ = 1.0;
+    int iteration_ = 0;
+    Sample best_{0.0, std::numeric_limits<double>::infinity(), glm::dvec3(0.0)};
+    bool newton_converged_ = false;
+    bool done_ = false;
+};
+
+/// Searches run in lockstep: each round evaluates f and its gradient at the next point of every
+/// search still going, in one batch.
+constexpr std::size_t kLockstep = 8;
+
+}  // namespace
+
+void find_edge_roots(Evaluator& evaluator, std::span<const EdgeSegment> edges,
+                     std::span<EdgeRoot> roots) {
+    assert(edges.size() == roots.size());
+    for (std::size_t begin = 0; begin < edges.size(); begin += kLockstep) {
+        const std::size_t n = std::min(kLockstep, edges.size() - begin);
+        std::array<std::optional<RootSearch>, kLockstep> searches;
+        for (std::size_t i = 0; i < n; ++i) searches[i].emplace(edges[begin + i]);
+        std::array<std::size_t, kLockstep> going;
+        std::array<double, kLockstep> x, y, z;
+        std::array<ValueGradient, kLockstep> samples;
+        for (;;) {
+            std::size_t m = 0;
+            for (std::size_t i = 0; i < n; ++i) {
+                if (searches[i]->done()) continue;
+                const glm::dvec3 p = searches[i]->next();
+                going[m] = i;
+                x[m] = p.x;
+                y[m] = p.y;
+                z[m] = p.z;
+                ++m;
+            }
+            if (m == 0) break;
+            evaluator.value_gradients(
+                {std::span(x).first(m), std::span(y).first(m), std::span(z).first(m)},
+                std::span(samples).first(m));
+            for (std::size_t k = 0; k < m; ++k) searches[going[k]]->take(samples[k]);
+        }
+        for (std::size_t i = 0; i < n; ++i) roots[begin + i] = searches[i]->root();
+    }
+}
+
+EdgeRoot find_edge_root(Evaluator& evaluator, const EdgeSegment& edge) {
+    EdgeRoot root;
+    find_edge_roots(evaluator, {&edge, 1}, {&root, 1});
+    return root;
 }
 
 namespace {
@@ -168,8 +242,15 @@ class RootCounter {
         }
         const glm::dvec3 mid = piece.at(0.5);
         const double fm = evaluator_.value(mid);
-        visit({piece.a, mid, piece.fa, fm, piece.axis});
-        visit({mid, piece.b, fm, piece.fb, piece.axis});
+        // Both halves' enclosures in one batch (the evaluator's narrow vector kernel costs about
+        // one box), though the second is not needed once the first holds `limit` roots.
+        const EdgeSegment halves[2] = {{piece.a, mid, piece.fa, fm, piece.axis},
+                                       {mid, piece.b, fm, piece.fb, piece.axis}};
+        const Box boxes[2] = {halves[0].box(), halves[1].box()};
+        IntervalGradient enclosures[2];
+        evaluator_.interval_gradients(boxes, enclosures);
+        visit(halves[0], &enclosures[0]);
+        visit(halves[1], &enclosures[1]);
     }
 
     Evaluator& evaluator_;

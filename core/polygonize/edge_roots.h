@@ -3,6 +3,8 @@
 // mesh vertex.
 #pragma once
 
+#include <span>
+
 #include <glm/vec3.hpp>
 
 #include "eval/evaluator.h"
@@ -44,6 +46,12 @@ struct EdgeRoot {
 /// cannot shrink further. A root exactly at an end is returned as that end.
 /// Precondition: is_inside(fa) != is_inside(fb) (lattice.h). Any segment, not only lattice edges.
 EdgeRoot find_edge_root(Evaluator& evaluator, const EdgeSegment& edge);
+
+/// roots[i] = find_edge_root(evaluator, edges[i]), bit for bit, the searches run in lockstep a
+/// few at a time so that each round's samples are evaluated in one batch
+/// (Evaluator::value_gradients). Precondition: equal sizes.
+void find_edge_roots(Evaluator& evaluator, std::span<const EdgeSegment> edges,
+                     std::span<EdgeRoot> roots);
 
 struct EdgeRootCount {
     /// Roots found, counted up to the caller's limit.

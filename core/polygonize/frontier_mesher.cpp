@@ -151,22 +151,25 @@ void locate_crossings(EvaluatorPool& workers, const Lattice& lattice,
 /// the octree order: a pending cell by its 8 children, pending too; a settled cell by the leaves
 /// of its classified subtree (split_settled), or, in a mesh of an unfinished octree (`preview`),
 /// by its 8 children as pending cells too (classifying a subtree there could cost more than the
-/// whole octree so far). The new cells are appended to `added`.
+/// whole octree so far). The new cells are appended to `added`. Once the budget is exhausted, no
+/// cell but the first starts: `split_count` says how many of `which`, from the first on, were
+/// split (the others are left as they were, for the next call).
 std::vector<FrontierCell> split_cells(EvaluatorPool& workers, const Lattice& lattice,
                                       const OctreeSettings& settings,
                                       const std::vector<FrontierCell>& frontier,
                                       const std::vector<CellId>& which, bool preview,
                                       ValueMap& values, std::vector<CellId>& added,
-                                      const WorkBudget& budget) {
+                                      const WorkBudget& budget, std::size_t& split_count) {
     std::vector<std::vector<FrontierCell>> subtrees(which.size());
     std::vector<ValueMap> evaluated(which.size());
+    std::vector<std::uint8_t> done(which.size(), 0);
     std::size_t next = 0;
     std::vector<CellState> states(which.size());
     for (const FrontierCell& f : frontier) {
         if (next < which.size() && f.cell == which[next]) states[next++] = f.state;
     }
     workers.for_each(which.size(), [&](std::size_t i, CountingEvaluator& evaluator) {
-        if (budget.cancelled()) return;
+        if (budget.cancelled() || (i > 0 && budget.exhausted())) return;
         if (states[i] == CellState::Pending || preview) {
             for (int octant = 0; octant < 8; ++octant)
                 subtrees[i].push_back({which[i].child(octant), CellState::Pending});
@@ -174,11 +177,15 @@ std::vector<FrontierCell> split_cells(EvaluatorPool& workers, const Lattice& lat
             subtrees[i] =
                 split_settled(evaluator, lattice, settings, which[i], values, evaluated[i], budget);
         }
+        done[i] = 1;
     });
+    // The cells split in a row from the first (tasks run in any order): the same frontier
+    // whatever the threads' timing.
+    split_count = static_cast<std::size_t>(std::find(done.begin(), done.end(), 0) - done.begin());
     std::vector<FrontierCell> result;
     next = 0;
     for (const FrontierCell& f : frontier) {
-        if (next < which.size() && f.cell == which[next]) {
+        if (next < split_count && f.cell == which[next]) {
             const std::vector<FrontierCell>& subtree = subtrees[next];
             result.insert(result.end(), subtree.begin(), subtree.end());
             for (const FrontierCell& s : subtree) added.push_back(s.cell);
@@ -245,29 +252,46 @@ CrossingRoots crossings_used(const std::vector<LeafMeshes>& parts, const Lattice
     return result;
 }
 
-/// Finds the roots of crossings order[begin, end) of `crossings`, the evaluator specialised to
-/// each group in turn. (Specialisation does not change any evaluation's result: the roots are
-/// those of the whole tape.)
+/// Finds the roots of crossings order[first, last) of `crossings`, all of one group, with the
+/// evaluator specialised to the group's cell, in lockstep batches (find_edge_roots), the budget's
+/// cancellation checked between batches. (Specialisation does not change any evaluation's
+/// result: the roots are those of the whole tape.)
+void find_group_roots(Evaluator& evaluator, const Lattice& lattice, const ValueMap& values,
+                      CrossingRoots& crossings, std::size_t first, std::size_t last,
+                      const WorkBudget& budget) {
+    std::vector<EdgeSegment> segments;
+    segments.reserve(last - first);
+    for (std::size_t k = first; k < last; ++k)
+        segments.push_back(crossing_segment(values, lattice, crossings.keys[crossings.order[k]]));
+    std::vector<EdgeRoot> roots(segments.size());
+    evaluator.push(lattice.cell_box(crossings.groups[crossings.order[first]]));
+    constexpr std::size_t kRootsBetweenChecks = 16;
+    for (std::size_t i = 0; i < segments.size() && !budget.cancelled(); i += kRootsBetweenChecks) {
+        const std::size_t n = std::min(kRootsBetweenChecks, segments.size() - i);
+        find_edge_roots(evaluator, std::span(segments).subspan(i, n),
+                        std::span(roots).subspan(i, n));
+    }
+    evaluator.pop();
+    for (std::size_t k = first; k < last; ++k)
+        crossings.roots[crossings.order[k]] = roots[k - first];
+}
+
+/// Finds the roots of crossings order[begin, end) of `crossings`, group by group.
 void find_roots(EvaluatorPool& workers, const Lattice& lattice, const ValueMap& values,
                 CrossingRoots& crossings, std::size_t begin, std::size_t end,
                 const WorkBudget& budget) {
-    workers.for_each(task_count(end - begin, kEdgesPerTask),
-                     [&](std::size_t task, CountingEvaluator& evaluator) {
-                         const std::size_t first = begin + task * kEdgesPerTask;
-                         const std::size_t last = std::min(end, first + kEdgesPerTask);
-                         std::optional<CellId> pushed;
-                         for (std::size_t k = first; k < last && !budget.cancelled(); ++k) {
-                             const std::size_t i = crossings.order[k];
-                             if (pushed != crossings.groups[i]) {
-                                 if (pushed) evaluator.pop();
-                                 pushed = crossings.groups[i];
-                                 evaluator.push(lattice.cell_box(*pushed));
-                             }
-                             crossings.roots[i] = find_edge_root(
-                                 evaluator, crossing_segment(values, lattice, crossings.keys[i]));
-                         }
-                         if (pushed) evaluator.pop();
-                     });
+    workers.for_each(task_count(end - begin, kEdgesPerTask), [&](std::size_t task,
+                                                                 CountingEvaluator& evaluator) {
+        const std::size_t first = begin + task * kEdgesPerTask;
+        const std::size_t last = std::min(end, first + kEdgesPerTask);
+        for (std::size_t k = first; k < last && !budget.cancelled();) {
+            const CellId& group = crossings.groups[crossings.order[k]];
+            std::size_t run = k + 1;
+            while (run < last && crossings.groups[crossings.order[run]] == group) ++run;
+            find_group_roots(evaluator, lattice, values, crossings, k, run, budget);
+            k = run;
+        }
+    });
 }
 
 /// The mesh: a vertex per crossing that is a root, then the leaves' own vertices; triangles
@@ -368,7 +392,9 @@ class FrontierMesher::Impl {
     /// Leaves, crossings or cells handled between two looks at the budget.
     static constexpr std::size_t kChunk = 4096;
     /// Cells split between two looks: fewer, since a settled cell's split classifies its whole
-    /// subtree down to the finest depth (0.15 ms a cell on colonnade.vm: 4,096 took 612 ms).
+    /// subtree down to the finest depth (0.15 ms a cell on colonnade.vm: 4,096 took 612 ms, and
+    /// 256 up to 250 ms on bear.vm); a chunk also stops starting cells once the budget is
+    /// exhausted (split_cells).
     static constexpr std::size_t kSplitChunk = 256;
 
     /// One chunk of the current stage; false when cancelled midway (the chunk is done again).
@@ -461,8 +487,7 @@ class FrontierMesher::Impl {
 
     void split_chunk() {
         const std::size_t end = std::min(to_split_.size(), split_cursor_ + kSplitChunk);
-        split({to_split_.begin() + split_cursor_, to_split_.begin() + end});
-        split_cursor_ = end;
+        split_cursor_ += split({to_split_.begin() + split_cursor_, to_split_.begin() + end});
         if (split_cursor_ == to_split_.size()) stage_ = Stage::corners;
     }
 
@@ -565,15 +590,16 @@ class FrontierMesher::Impl {
         return result;
     }
 
-    /// Splits the leaves `cells` (in order), keeping the index, the leaves' states and the
-    /// crossings up to date.
-    void split(const std::vector<CellId>& cells) {
+    /// Splits the leaves `cells` (in order), or as many of them from the first on as the budget
+    /// allows (returned), keeping the index, the leaves' states and the crossings up to date.
+    std::size_t split(const std::vector<CellId>& cells) {
         const std::size_t before = fresh_.size();
+        std::size_t count = 0;
         frontier_ = split_cells(workers_, lattice_, settings_, frontier_, cells, preview_, values_,
-                                fresh_, *budget_);
+                                fresh_, *budget_, count);
         std::vector<CellId> old_leaves = std::exchange(leaves_, cells_of(frontier_));
         carry_states(old_leaves);
-        for (const CellId& cell : cells) {
+        for (const CellId& cell : std::span(cells).first(count)) {
             for (const CellId& n : index_->face_neighbours(cell)) {
                 LeafState& state = states_[position(n)];
                 state.grade = state.stale = true;
@@ -589,6 +615,7 @@ class FrontierMesher::Impl {
         } else {
             unlocated_.insert(unlocated_.end(), fresh_.begin() + before, fresh_.end());
         }
+        return count;
     }
 
     /// Moves the states of the leaves kept from `old_leaves` to their places in leaves_; the

@@ -36,7 +36,7 @@ namespace {
 /// Root counting on a cell's edge bisects down to a quarter of the finest regular level's step.
 constexpr int kSubLatticeBisections = 2;
 /// Cells per worker task (consecutive in octree order, so that they share most ancestors).
-constexpr std::size_t kCellsPerTask = 64;
+constexpr std::size_t kCellsPerTask = 256;
 /// Cells per round of tasks handed to the pool.
 constexpr std::size_t kCellsPerRound = 2048;
 
@@ -87,31 +87,34 @@ class CellClassifier {
             std::size_t end = done + 1;
             while (end < cells.size() && cells[end].parent() == cells[done].parent()) ++end;
             if (cells[done].depth > 0) walk_to(cells[done].parent());
-            const std::size_t classified = classify_siblings(cells.subspan(done, end - done),
-                                                             out.subspan(done, end - done), budget);
+            const std::size_t classified =
+                classify_siblings(cells.subspan(done, end - done), out.subspan(done, end - done),
+                                  [&budget] { return budget.exhausted(); });
             done += classified;
             if (done < end) break;
         }
         return done;
     }
 
-    /// One cell, with the evaluator already specialised to its parent (or not at all).
-    CellOutcome classify_one(const CellId& cell) {
-        const Box box = lattice_.cell_box(cell);
-        if (cell.depth < settings_.min_depth) return coarse_outcome(evaluator_.interval(box));
-        return outcome(cell, evaluator_.interval_gradient(box));
+    /// The 8 children of `cell`, with the evaluator already specialised to it, their enclosures
+    /// in one batch; stops early (leaving the rest Empty) when the budget is cancelled.
+    std::array<CellOutcome, 8> classify_children(const CellId& cell, const WorkBudget& budget) {
+        std::array<CellId, 8> children;
+        for (int octant = 0; octant < 8; ++octant) children[octant] = cell.child(octant);
+        std::array<CellOutcome, 8> out;
+        out.fill(CellOutcome::Empty);
+        classify_siblings(children, out, [&budget] { return budget.cancelled(); });
+        return out;
     }
 
     CornerCache& corners() { return corners_; }
-    /// The cells classified next are the children of one cell (until the next call): they share
-    /// the edges whose root counts edges_ keeps.
-    void begin_siblings() { edges_.clear(); }
 
   private:
     /// The siblings' enclosures in one batch, then each one's outcome; stops (returning how many
-    /// were classified, at least one) when the budget is exhausted.
+    /// were classified, at least one) when `stop()` says so.
+    template <class Stop>
     std::size_t classify_siblings(std::span<const CellId> cells, std::span<CellOutcome> out,
-                                  const WorkBudget& budget) {
+                                  const Stop& stop) {
         boxes_.clear();
         for (const CellId& cell : cells) boxes_.push_back(lattice_.cell_box(cell));
         if (cells.front().depth < settings_.min_depth) {
@@ -122,12 +125,28 @@ class CellClassifier {
         }
         enclosures_.resize(cells.size());
         evaluator_.interval_gradients(boxes_, enclosures_);
-        begin_siblings();
+        prefetch_corners(cells);
+        edges_.clear();  // the siblings share edges, whose root counts edges_ keeps
         for (std::size_t i = 0; i < cells.size(); ++i) {
-            if (i > 0 && budget.exhausted()) return i;
+            if (i > 0 && stop()) return i;
             out[i] = outcome(cells[i], enclosures_[i]);
         }
         return cells.size();
+    }
+
+    /// The corners and centres of the siblings whose enclosure of f holds 0 (most of them
+    /// need those values next: the mean value form, the edges, the feature search; the mesher the
+    /// corners of every leaf), evaluated in one batch rather than one by one.
+    void prefetch_corners(std::span<const CellId> cells) {
+        points_.clear();
+        for (std::size_t i = 0; i < cells.size(); ++i) {
+            if (enclosures_[i].value.value.excludes_zero()) continue;
+            for (int c = 0; c < 8; ++c) points_.push_back(lattice_.corner(cells[i], c));
+            if (cells[i].depth < lattice_.max_depth())
+                points_.push_back(lattice_.origin(cells[i]) +
+                                  glm::u32vec3(lattice_.span(cells[i].depth) / 2));
+        }
+        corners_.prefetch(points_);
     }
 
     static CellOutcome coarse_outcome(const IntervalValue& value) {
@@ -233,9 +252,10 @@ class CellClassifier {
     const Lattice& lattice_;
     const OctreeSettings& settings_;
     CornerCache corners_;
-    EdgeRootCounts edges_;      // of the siblings being classified (begin_siblings)
+    EdgeRootCounts edges_;      // of the siblings being classified (classify_siblings)
     std::vector<CellId> path_;  // path_[k]: the pushed ancestor at depth k
     std::vector<Box> boxes_;
+    std::vector<glm::u32vec3> points_;
     std::vector<IntervalValue> values_;
     std::vector<IntervalGradient> enclosures_;
 };
@@ -384,10 +404,10 @@ void classify_subtree(Evaluator& evaluator, CellClassifier& classifier, const La
                       const OctreeSettings& settings, const CellId& cell,
                       std::vector<FrontierCell>& out, const WorkBudget& budget) {
     evaluator.push(lattice.cell_box(cell));
+    const std::array<CellOutcome, 8> outcomes = classifier.classify_children(cell, budget);
     for (int octant = 0; octant < 8 && !budget.cancelled(); ++octant) {
         const CellId child = cell.child(octant);
-        if (octant == 0) classifier.begin_siblings();
-        switch (classifier.classify_one(child)) {
+        switch (outcomes[octant]) {
             case CellOutcome::Empty:
             case CellOutcome::Region:
                 break;

@@ -128,6 +128,26 @@ TEST_P(Kernels, match_reference_bitwise) {
     }
 }
 
+// Batches of every size run the one-box, the narrow (kIntervalFewLanes) and the wide kernels, a
+// batch's last few boxes the narrow one: each lane equals the reference bit for bit.
+TEST_P(Kernels, batches_of_any_size_match_reference_bitwise) {
+    auto fast = make(false), reference = make(true);
+    const std::vector<Box> all = boxes(24, 60);
+    for (std::size_t size : {2u, 3u, 4u, 5u, 9u, 12u, 13u}) {
+        std::span<const Box> group(all.data(), size);
+        std::vector<IntervalValue> values(size);
+        std::vector<IntervalGradient> gradients(size);
+        fast->intervals(group, values);
+        fast->interval_gradients(group, gradients);
+        for (std::size_t l = 0; l < size; ++l) {
+            ASSERT_TRUE(same(values[l], reference->interval(group[l])))
+                << describe(group[l]) << " lane " << l << " of " << size;
+            ASSERT_TRUE(same(gradients[l], reference->interval_gradient(group[l])))
+                << describe(group[l]) << " lane " << l << " of " << size;
+        }
+    }
+}
+
 // Simplification from the kernels' choices (reused from the batch that just evaluated the box, or
 // from a new evaluation) specialises the tape exactly as the reference's choices do.
 TEST_P(Kernels, simplify_as_reference) {
