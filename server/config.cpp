@@ -157,8 +157,9 @@ const std::vector<Option>& options() {
                        &ServerConfig::draco_speed, 0, 10),
         integer_option("first-mesh-cache",
                        "first meshes of new sessions kept by request (function, parameters, "
-                       "box, constraints), least recently used dropped first: sessions opening "
-                       "the same example share their first mesh's work (0: none kept)",
+                       "box, constraints; a request is kept when asked for a second time), least "
+                       "recently used dropped first: sessions opening the same example share "
+                       "their first mesh's work (0: none kept)",
                        &ServerConfig::first_mesh_cache, 0, 1 << 20),
         integer_option("first-mesh-cache-mb", "MiB the first meshes kept may hold",
                        &ServerConfig::first_mesh_cache_mb, 1, 1ull << 20),

@@ -1,6 +1,7 @@
 #include "server/first_mesh_cache.h"
 
 #include <cstring>
+#include <functional>
 
 namespace isomesh::server {
 namespace {
@@ -70,6 +71,15 @@ std::shared_ptr<const FirstMesh> FirstMeshCache::find(const std::string& key) {
     if (it == slots_.end()) return nullptr;
     order_.splice(order_.begin(), order_, it->second.position);
     return it->second.first;
+}
+
+bool FirstMeshCache::seen_before(const std::string& key) {
+    const std::size_t hash = std::hash<std::string>()(key);
+    std::lock_guard lock(mutex_);
+    if (seen_.contains(hash)) return true;
+    if (seen_.size() >= 4 * max_entries_) seen_.clear();
+    seen_.insert(hash);
+    return false;
 }
 
 void FirstMeshCache::insert(const std::string& key, std::shared_ptr<const FirstMesh> first) {

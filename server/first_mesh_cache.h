@@ -13,7 +13,9 @@
 // client still ends with the mesh the request gives.
 //
 // Bounded: at most max_entries entries and max_bytes bytes (estimated), least recently used
-// evicted first. Thread-safe.
+// evicted first. A request is kept the second time it is made (seen_before): sessions asking for
+// meshes of their own (a user's own equation, a slider's values) pay no copy into the cache.
+// Thread-safe.
 #pragma once
 
 #include <array>
@@ -24,6 +26,8 @@
 #include <optional>
 #include <string>
 #include <unordered_map>
+
+#include <absl/container/flat_hash_set.h>
 
 #include "protocol/messages.h"
 #include "refine/refiner.h"
@@ -61,6 +65,9 @@ class FirstMeshCache {
 
     /// The entry of `key`, now the most recently used; null when there is none.
     std::shared_ptr<const FirstMesh> find(const std::string& key);
+    /// True when `key` was asked for before (by hash, among the last few times max_entries keys);
+    /// records it otherwise.
+    bool seen_before(const std::string& key);
     /// Keeps `first` under `key` (replacing an entry of that key), evicting the least recently
     /// used entries beyond the bounds; an entry larger than max_bytes alone is not kept.
     void insert(const std::string& key, std::shared_ptr<const FirstMesh> first);
@@ -82,6 +89,7 @@ class FirstMeshCache {
     Order order_;
     std::unordered_map<std::string, Slot> slots_;
     std::uint64_t bytes_ = 0;
+    absl::flat_hash_set<std::size_t> seen_;  // hashes of keys asked for, cleared when full
 };
 
 }  // namespace isomesh::server

@@ -390,6 +390,8 @@ bool MeshSession::show_cached_first_mesh(Inbox& inbox, const FunctionVersion& ve
     std::shared_ptr<const FirstMesh> first = services_.first_meshes->find(*first_mesh_key_);
     if (!first) {
         services_.metrics.first_mesh_cache_misses.add();
+        // Kept the second time it is asked for (first_mesh_cache.h).
+        if (!services_.first_meshes->seen_before(*first_mesh_key_)) first_mesh_key_.reset();
         return false;
     }
     services_.metrics.first_mesh_cache_hits.add();

@@ -71,15 +71,27 @@ TEST(FirstMeshCache, first_mesh_key_is_the_parsed_request) {
     EXPECT_NE(key("x^2+y^2+z^2=a", 4), first_mesh_key(version_of(boxed), 2));
 }
 
+TEST(FirstMeshCache, seen_before_admits_a_key_the_second_time) {
+    FirstMeshCache cache(1, 1 << 20);
+    EXPECT_FALSE(cache.seen_before("a"));
+    EXPECT_TRUE(cache.seen_before("a"));
+    for (const char* key : {"b", "c", "d", "e"}) EXPECT_FALSE(cache.seen_before(key));
+    EXPECT_FALSE(cache.seen_before("a"));  // forgotten: at most 4 keys per entry are remembered
+}
+
 TEST(FirstMeshCache, sessions_of_one_request_share_the_first_mesh_and_end_alike) {
     Fixture f;
     TestConnection a(f.service), b(f.service);
     const protocol::Create request = create_request("x^2+y^2+z^2+2cos(2x)=5", 5000);
-    const auto first = create(a, request);
+    // Made twice (kept the second time), then shared.
+    protocol::Create again = request;
+    again.id = 2;
+    ASSERT_TRUE(wait_converged(a, create(a, request)));
+    const auto first = create(a, again);
     ASSERT_TRUE(wait_converged(a, first));
     const auto second = create(b, request);
     ASSERT_TRUE(wait_converged(b, second));
-    EXPECT_EQ(f.metrics.first_mesh_cache_misses.value(), 1u);
+    EXPECT_EQ(f.metrics.first_mesh_cache_misses.value(), 2u);
     EXPECT_EQ(f.metrics.first_mesh_cache_hits.value(), 1u);
     EXPECT_EQ(f.metrics.first_mesh_cache_mismatches.value(), 0u);
     // The kept keyframe names the second session, and nothing else replaced it.
@@ -97,7 +109,10 @@ TEST(FirstMeshCache, a_kept_mesh_the_session_does_not_make_is_replaced_by_its_ow
     TestConnection a(f.service), b(f.service);
     const protocol::Create small = create_request("x^2+y^2+z^2=2", 3000);
     const protocol::Create large = create_request("x^2+y^2+z^2=5", 3000);
+    protocol::Create small_again = small;
+    small_again.id = 2;
     ASSERT_TRUE(wait_converged(a, create(a, small)));
+    ASSERT_TRUE(wait_converged(a, create(a, small_again)));
     std::shared_ptr<const FirstMesh> kept;
     for (unsigned protocols = 1; protocols <= 3 && !kept; ++protocols)
         kept = f.service.first_mesh_cache().find(*first_mesh_key(version_of(small), protocols));
