@@ -18,11 +18,10 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
-#include <map>
 #include <optional>
 #include <string>
-#include <unordered_map>
-#include <unordered_set>
+
+#include <absl/container/flat_hash_set.h>
 
 #include "protocol/delta_v2_geometry.h"
 #include "protocol/delta_v2_overlay.h"
@@ -86,8 +85,8 @@ class DeltaEncoder {
     std::uint64_t next_triangle_;
     std::uint32_t base_vertex_;
     std::uint32_t next_vertex_;
-    std::unordered_map<std::uint32_t, std::uint32_t> final_;  // provisional -> final vertex id
-    std::vector<std::uint32_t> loose_;                        // indices into new_vertices
+    IdTable<std::uint32_t, std::uint32_t> final_;  // provisional -> final vertex id
+    std::vector<std::uint32_t> loose_;             // indices into new_vertices
     EncodedDeltaV2 out_;
 };
 
@@ -132,8 +131,8 @@ std::vector<PlannedSplit> DeltaEncoder::plan_splits() {
     for (std::uint32_t v : inferred.loose) loose_.push_back(v - base_vertex_);
 
     Overlay scratch(held_);
-    std::unordered_map<std::uint64_t, int> round_made;  // scratch triangle id -> round
-    std::uint64_t scratch_id = kMaxTriangleId + 1;      // apart from held ids
+    IdTable<std::uint64_t, int> round_made;         // scratch triangle id -> round
+    std::uint64_t scratch_id = kMaxTriangleId + 1;  // apart from held ids
     std::vector<PlannedSplit> planned;
     for (const InferredSplit& s : inferred.splits) {
         const auto forward = scratch.holding(s.p, s.q);
@@ -250,14 +249,20 @@ void DeltaEncoder::emit_explicit() {
         final_[change_.new_vertices[index].id] = next_vertex_;
         out_.vertex_ids[index] = next_vertex_++;
     }
-    std::map<Corners, std::size_t> wanted;  // canonical corners -> index in change.added
+    IdTable<Corners, std::size_t> wanted;  // canonical corners -> index in change.added
+    wanted.reserve(change_.added.size());
     for (std::size_t i = 0; i < change_.added.size(); ++i) {
         const Corners& c = change_.added[i].vertices;
         wanted[canonical_rotation({final_id(c[0]), final_id(c[1]), final_id(c[2])})] = i;
     }
+    // The triangles the splits made, by id: which of two alike (a doubled triangle) matches must
+    // not depend on the table's order.
+    std::vector<std::pair<std::uint64_t, Corners>> created(overlay_.created().begin(),
+                                                           overlay_.created().end());
+    std::sort(created.begin(), created.end());
     std::vector<std::uint64_t> removals;
     std::vector<bool> matched(change_.added.size(), false);
-    for (const auto& [id, c] : overlay_.created()) {
+    for (const auto& [id, c] : created) {
         auto it = wanted.find(canonical_rotation(c));
         if (it != wanted.end() && !matched[it->second]) {
             matched[it->second] = true;
@@ -266,8 +271,8 @@ void DeltaEncoder::emit_explicit() {
             removals.push_back(id);
         }
     }
-    const std::unordered_set<std::uint64_t> target_removed(change_.removed.begin(),
-                                                           change_.removed.end());
+    const absl::flat_hash_set<std::uint64_t> target_removed(change_.removed.begin(),
+                                                            change_.removed.end());
     for (std::uint64_t id : change_.removed) {
         if (!overlay_.removed().contains(id)) removals.push_back(id);
     }

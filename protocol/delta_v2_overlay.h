@@ -7,9 +7,9 @@
 #include <cstdint>
 #include <span>
 #include <string>
-#include <unordered_map>
-#include <unordered_set>
 #include <vector>
+
+#include <absl/container/flat_hash_set.h>
 
 #include "protocol/delta_v2.h"
 #include "protocol/delta_v2_geometry.h"
@@ -127,7 +127,7 @@ class Overlay {
         for (const auto& [id, c] : created_) out.triangles.push_back({id, c});
         std::sort(out.triangles.begin(), out.triangles.end(),
                   [](const FrameTriangle& a, const FrameTriangle& b) { return a.id < b.id; });
-        std::unordered_set<std::uint32_t> listed;
+        absl::flat_hash_set<std::uint32_t> listed;
         listed.reserve(3 * out.triangles.size() + moved.size());
         out.vertices.reserve(listed.bucket_count());
         auto list = [&](std::uint32_t id) {
@@ -142,8 +142,10 @@ class Overlay {
         return out;
     }
 
-    const std::unordered_map<std::uint64_t, Corners>& created() const { return created_; }
-    const std::unordered_set<std::uint64_t>& removed() const { return removed_; }
+    /// The triangles made (and still live), in no particular order.
+    const IdTable<std::uint64_t, Corners>& created() const { return created_; }
+    /// The held triangles removed, in no particular order.
+    const absl::flat_hash_set<std::uint64_t>& removed() const { return removed_; }
 
   private:
     std::vector<std::uint64_t>& star_mut(std::uint32_t v) {
@@ -156,10 +158,10 @@ class Overlay {
     }
 
     const HeldMesh& held_;
-    std::unordered_map<std::uint64_t, Corners> created_;
-    std::unordered_set<std::uint64_t> removed_;
-    std::unordered_map<std::uint32_t, std::vector<std::uint64_t>> stars_;
-    std::unordered_map<std::uint32_t, Vertex> vertices_;
+    IdTable<std::uint64_t, Corners> created_;
+    absl::flat_hash_set<std::uint64_t> removed_;
+    IdTable<std::uint32_t, std::vector<std::uint64_t>> stars_;
+    IdTable<std::uint32_t, Vertex> vertices_;
 };
 
 }  // namespace isomesh::protocol::delta_v2_detail

@@ -198,6 +198,13 @@ std::vector<std::uint8_t> with_session(std::span<const std::uint8_t> frame,
     return out;
 }
 
+std::vector<std::uint8_t> with_session(std::span<const std::uint8_t> frame,
+                                       const SessionId& session, std::uint64_t timestamp_us) {
+    std::vector<std::uint8_t> out = with_session(frame, session);
+    put<std::uint64_t>(out, 32, timestamp_us);
+    return out;
+}
+
 std::uint64_t frame_sequence(std::span<const std::uint8_t> frame) {
     return frame.size() >= 32 ? get<std::uint64_t>(frame, 24) : 0;
 }

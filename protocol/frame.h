@@ -107,6 +107,10 @@ void write_delta_v2_header(const FrameHeader& header,
 /// view id receive.
 std::vector<std::uint8_t> with_session(std::span<const std::uint8_t> frame,
                                        const SessionId& session);
+/// The same, stamped `timestamp_us` too: a frame made for another session (the first mesh of a
+/// request, server/first_mesh_cache.h).
+std::vector<std::uint8_t> with_session(std::span<const std::uint8_t> frame,
+                                       const SessionId& session, std::uint64_t timestamp_us);
 
 /// The sequence number in a frame's header (0 for anything shorter than 32 bytes).
 std::uint64_t frame_sequence(std::span<const std::uint8_t> frame);

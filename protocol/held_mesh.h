@@ -7,12 +7,20 @@
 #include <array>
 #include <cstdint>
 #include <span>
-#include <unordered_map>
 #include <vector>
+
+#include <absl/container/flat_hash_map.h>
 
 #include "protocol/frame.h"
 
 namespace isomesh::protocol {
+
+/// Hash tables by triangle or vertex id: Abseil's Swiss tables (open addressing, no allocation per
+/// entry; the node-based std::unordered_map's lookups and allocations were most of a version-2
+/// delta's encoding time). Iteration order is unspecified and changes from run to run: nothing
+/// that reaches a frame may depend on it. References into a table last until it next changes.
+template <class Key, class Value>
+using IdTable = absl::flat_hash_map<Key, Value>;
 
 class HeldMesh {
   public:
@@ -33,16 +41,16 @@ class HeldMesh {
 
     std::size_t triangle_count() const { return triangles_.size(); }
     std::size_t vertex_count() const { return vertices_.size(); }
-    const std::unordered_map<std::uint64_t, Corners>& triangles() const { return triangles_; }
-    const std::unordered_map<std::uint32_t, Vertex>& vertices() const { return vertices_; }
+    const IdTable<std::uint64_t, Corners>& triangles() const { return triangles_; }
+    const IdTable<std::uint32_t, Vertex>& vertices() const { return vertices_; }
 
   private:
     void remove(std::uint64_t id);
     void add(std::uint64_t id, const Corners& corners);
 
-    std::unordered_map<std::uint64_t, Corners> triangles_;
-    std::unordered_map<std::uint32_t, Vertex> vertices_;
-    std::unordered_map<std::uint32_t, std::vector<std::uint64_t>> stars_;
+    IdTable<std::uint64_t, Corners> triangles_;
+    IdTable<std::uint32_t, Vertex> vertices_;
+    IdTable<std::uint32_t, std::vector<std::uint64_t>> stars_;
 };
 
 }  // namespace isomesh::protocol

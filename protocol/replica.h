@@ -6,7 +6,6 @@
 #pragma once
 
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
 #include "protocol/frame.h"
@@ -36,10 +35,10 @@ class MeshReplica {
 
     std::size_t triangle_count() const { return held_.triangle_count(); }
     std::size_t vertex_count() const { return held_.vertex_count(); }
-    const std::unordered_map<std::uint64_t, std::array<std::uint32_t, 3>>& triangles() const {
+    const IdTable<std::uint64_t, std::array<std::uint32_t, 3>>& triangles() const {
         return held_.triangles();
     }
-    const std::unordered_map<std::uint32_t, Vertex>& vertices() const { return held_.vertices(); }
+    const IdTable<std::uint32_t, Vertex>& vertices() const { return held_.vertices(); }
     const HeldMesh& held() const { return held_; }
 
     /// The triangles sorted by id, corners in canonical_rotation, for comparing meshes.

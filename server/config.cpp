@@ -155,6 +155,14 @@ const std::vector<Option>& options() {
                        &ServerConfig::batch_triangles, 1, kU32),
         integer_option("draco-speed", "Draco encoder speed, 0 (smallest frames) to 10 (fastest)",
                        &ServerConfig::draco_speed, 0, 10),
+        integer_option("first-mesh-cache",
+                       "first meshes of new sessions kept by request (function, parameters, "
+                       "box, constraints; a request is kept when asked for a second time), least "
+                       "recently used dropped first: sessions opening the same example share "
+                       "their first mesh's work (0: none kept)",
+                       &ServerConfig::first_mesh_cache, 0, 1 << 20),
+        integer_option("first-mesh-cache-mb", "MiB the first meshes kept may hold",
+                       &ServerConfig::first_mesh_cache_mb, 1, 1ull << 20),
         integer_option("max-message-bytes", "largest control message accepted",
                        &ServerConfig::max_message_bytes, 256, 64 << 20),
         allow_origin_option(),

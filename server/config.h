@@ -35,6 +35,9 @@ struct ServerConfig {
     std::uint32_t batch_ms = 20;  ///< deltas are flushed at least this often while refining
     std::uint32_t batch_triangles = 2000;  ///< ... and as soon as this many triangles changed
     unsigned draco_speed = 2;  ///< Draco encoder speed: 0 smallest frames ... 10 fastest
+    /// New sessions' first meshes kept by request (server/first_mesh_cache.h); 0: none.
+    std::size_t first_mesh_cache = 256;
+    std::uint64_t first_mesh_cache_mb = 64;  ///< ... and the MiB they may hold
 
     // access
     /// Origins (scheme://host[:port]) allowed to open a WebSocket, comma-separated; "*": any.

@@ -120,6 +120,7 @@ MeshService::MeshService(const ServerConfig& config, Logger& logger, Metrics& me
       metrics_(metrics),
       version_limits_(version_limits(config)),
       parse_limits_(parse_limits(config)),
+      first_meshes_(config.first_mesh_cache, config.first_mesh_cache_mb << 20),
       pool_(resolved_worker_threads(config), &metrics,
             [&logger](std::exception_ptr error) {
                 try {
@@ -515,7 +516,8 @@ std::shared_ptr<MeshSession> MeshService::start_session(const SessionIds& ids,
                                                         const std::shared_ptr<Client>& creator) {
     auto session = std::make_shared<MeshSession>(
         ids, std::move(version),
-        SessionServices{pool_, watchdog_, metrics_, logger_, session_settings(config_)},
+        SessionServices{pool_, watchdog_, metrics_, logger_, session_settings(config_),
+                        config_.first_mesh_cache > 0 ? &first_meshes_ : nullptr},
         [this](const protocol::SessionId& ended_id) { ended(ended_id); });
     sessions_[ids.control] = Entry{session, protocol::Access::control, creator};
     sessions_[ids.view] = Entry{session, protocol::Access::view, {}};

@@ -30,6 +30,7 @@
 
 #include "server/client.h"
 #include "server/config.h"
+#include "server/first_mesh_cache.h"
 #include "server/log.h"
 #include "server/metrics.h"
 #include "server/resources.h"
@@ -78,6 +79,8 @@ class MeshService {
     /// (`unavailable`). Does not wait for the workers.
     void shutdown();
     bool shutting_down() const { return shutting_down_; }
+    /// New sessions' first meshes (first_mesh_cache.h; tests look into it).
+    FirstMeshCache& first_mesh_cache() { return first_meshes_; }
     /// Why the server should get no new connections now (draining, the store down), if so.
     std::optional<std::string> unready() const;
     /// Waits until no worker is busy, or until `deadline`; true when idle. A worker stuck in work
@@ -163,6 +166,7 @@ class MeshService {
     Metrics& metrics_;
     VersionLimits version_limits_;
     protocol::ParseLimits parse_limits_;
+    FirstMeshCache first_meshes_;  // before the pool: the sessions' turns use it
     Watchdog watchdog_;
     WorkerPool pool_;
     std::atomic<bool> shutting_down_{false};

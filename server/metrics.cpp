@@ -113,7 +113,19 @@ std::string Metrics::render() const {
           memory_reserved_bytes);
     gauge("memory_estimate_bytes", "Memory the sessions hold, estimated.", memory_estimate_bytes);
     gauge("resident_bytes", "Resident memory of the process.", resident_bytes);
+    gauge("first_mesh_cache_entries", "First meshes kept for new sessions (--first-mesh-cache).",
+          first_mesh_cache_entries);
+    gauge("first_mesh_cache_bytes", "Memory of the first meshes kept, estimated.",
+          first_mesh_cache_bytes);
     counter("sessions_created", "Sessions created.", sessions_created);
+    counter("first_mesh_cache_hits", "New sessions that sent a first mesh kept for their request.",
+            first_mesh_cache_hits);
+    counter("first_mesh_cache_misses", "New sessions that made their first mesh.",
+            first_mesh_cache_misses);
+    counter("first_mesh_cache_mismatches",
+            "Kept first meshes that the session's own first step did not reproduce (its mesh "
+            "was sent then).",
+            first_mesh_cache_mismatches);
     counter("sessions_expired", "Sessions expired (idle or without subscribers).",
             sessions_expired);
     counter("splits", "Triangle bisections.", splits);

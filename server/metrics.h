@@ -68,8 +68,10 @@ struct Metrics {
     Gauge http_connections_limit;         ///< --max-http-connections
     Gauge memory_limit_bytes;             ///< --max-memory-mb, resolved
     Gauge memory_reserved_bytes;          ///< the sessions' reservations (triangle budgets)
-    Gauge memory_estimate_bytes;  ///< what the sessions hold, estimated (server/resources.h)
-    Gauge resident_bytes;         ///< the process's resident set
+    Gauge memory_estimate_bytes;     ///< what the sessions hold, estimated (server/resources.h)
+    Gauge resident_bytes;            ///< the process's resident set
+    Gauge first_mesh_cache_entries;  ///< server/first_mesh_cache.h
+    Gauge first_mesh_cache_bytes;
 
     // counters
     Counter sessions_created;
@@ -82,13 +84,17 @@ struct Metrics {
     Counter bytes_sent;
     Counter messages_received;
     Counter http_requests;
-    Counter sessions_restored;  ///< rebuilt from the session store
-    Counter store_errors;       ///< session store calls that failed
-    Counter http_bad_requests;  ///< malformed HTTP requests and WebSocket handshakes (400)
-    Counter origins_refused;    ///< WebSocket handshakes from an Origin not allowed (403)
-    Counter http_evicted;       ///< HTTP connections closed to make room (limit, EMFILE)
-    Counter accept_errors;      ///< failed accept() calls (e.g. out of file descriptors)
-    Counter session_cpu_us;     ///< CPU time of session turns, microseconds
+    Counter sessions_restored;        ///< rebuilt from the session store
+    Counter store_errors;             ///< session store calls that failed
+    Counter http_bad_requests;        ///< malformed HTTP requests and WebSocket handshakes (400)
+    Counter origins_refused;          ///< WebSocket handshakes from an Origin not allowed (403)
+    Counter http_evicted;             ///< HTTP connections closed to make room (limit, EMFILE)
+    Counter accept_errors;            ///< failed accept() calls (e.g. out of file descriptors)
+    Counter session_cpu_us;           ///< CPU time of session turns, microseconds
+    Counter first_mesh_cache_hits;    ///< new sessions that sent a cached first mesh
+    Counter first_mesh_cache_misses;  ///< new sessions that made their first mesh
+    /// Cached first meshes that the session's own first step did not reproduce (then sent).
+    Counter first_mesh_cache_mismatches;
     std::array<Counter, protocol::kErrorCodeCount> errors;
     /// New sessions refused, by reason (sessions_refused_total{reason=...}).
     static constexpr int kRefusedPerConnection = 0, kRefusedSessions = 1, kRefusedMemory = 2;

@@ -12,15 +12,6 @@ namespace {
 
 using protocol::ErrorCode;
 
-/// Adds a refiner step's changes to the batch being gathered for the next delta.
-void gather(DeltaBuilder& batch, const MeshDelta& delta) {
-    for (std::uint32_t id : delta.removed_triangles) batch.remove_triangle(id);
-    for (std::uint32_t id : delta.removed_vertices) batch.remove_vertex(id);
-    for (const DeltaVertex& v : delta.added_vertices) batch.add_vertex(v);
-    for (const DeltaVertex& v : delta.moved_vertices) batch.move_vertex(v);
-    for (const DeltaTriangle& t : delta.added_triangles) batch.add_triangle(t);
-}
-
 double milliseconds_between(Clock::time_point from, Clock::time_point to) {
     return 1000.0 * seconds_between(from, to);
 }
@@ -164,7 +155,8 @@ std::optional<Clock::time_point> MeshSession::orphaned_since() const {
 }
 
 void MeshSession::schedule() {
-    services_.pool.schedule(shared_from_this(), Lane::urgent);  // a request waits on this turn
+    // A request waits on this turn; until the first mesh, it is a new session's (worker_pool.h).
+    services_.pool.schedule(shared_from_this(), shown_ ? Lane::urgent : Lane::new_session);
 }
 
 // ---- the worker -------------------------------------------------------------------------------
@@ -272,7 +264,8 @@ bool MeshSession::turn() {
         if (started == Start::restarted) {
             // The first mesh of a new pipeline left in an urgent turn; its refinement goes on in
             // round-robin turns, so that the next new session's first mesh does not wait for it.
-            send_progress(inbox);
+            // (A cached first mesh was followed by its progress already.)
+            if (pipeline_->started()) send_progress(inbox);
             return true;
         }
         const bool more = refine_turn(inbox);
@@ -289,10 +282,24 @@ void MeshSession::observe_slice(Clock::time_point start) {
 }
 
 MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& inbox) {
+    const bool same_pipeline = pipeline_ && version.state.box == current_.state.box &&
+                               version.error_measure->name() == current_.error_measure->name();
+    if (same_pipeline && !pipeline_->started()) {
+        // A cached first mesh not yet confirmed: the new version builds on the pipeline's own
+        // (a slider's first update then moves its vertices, as without the cache).
+        confirm_first_mesh(inbox);
+        if (timed_out_) {
+            fail(ErrorCode::eval_timeout, timeout_message(services_.settings.eval_timeout),
+                 current_.request_id);
+            return Start::failed;
+        }
+    }
     // The old version's last changes, under its own version number; those of a version still
     // half applied (vertices partly moved) wait for the new version's first frame instead.
     if (!mid_change()) flush(inbox, false);
-    const bool restart_needed = !pipeline_ || version.state.box != current_.state.box ||
+    // A pipeline that has not made its first step (a cached first mesh shown) starts afresh.
+    const bool restart_needed = !pipeline_ || !pipeline_->started() ||
+                                version.state.box != current_.state.box ||
                                 version.error_measure->name() != current_.error_measure->name();
     if (restart_needed) {
         const Start started = restart(version, inbox);
@@ -309,7 +316,7 @@ MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& in
     current_ = std::move(version);
     converged_ = false;
     converged_message_.reset();
-    counters_at_version_ = pipeline_->counters();
+    counters_at_version_ = pipeline_->started() ? pipeline_->counters() : RefineCounters{};
     phase1_time_ = {};
     phase1_settled_ = false;
     last_progress_ = Clock::now();
@@ -317,23 +324,32 @@ MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& in
     return restart_needed ? Start::restarted : Start::started;
 }
 
-MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) {
+std::unique_ptr<Pipeline> MeshSession::make_pipeline(const FunctionVersion& version) const {
     PipelineSettings settings;
     settings.phase1.box = version.box;
     settings.phase1.min_depth = services_.settings.phase1_min_depth;
     settings.phase1.threads = 1;  // sessions run in parallel on the pool; the output is the same
     settings.refine.error_measure = version.error_measure;
     settings.refine.constraint = version.constraint;
-    auto pipeline = std::make_unique<Pipeline>(version.field, std::move(settings));
+    return std::make_unique<Pipeline>(version.field, std::move(settings));
+}
+
+PipelineStep MeshSession::first_step(Pipeline& pipeline) {
     const auto budget_us =
         std::chrono::duration_cast<std::chrono::microseconds>(services_.settings.first_mesh_budget)
             .count();
-    PipelineStep first;
-    {
-        // The step stops at its budget; the watchdog only catches a runaway evaluation.
-        auto guard = arm_eval_limit();
-        first = pipeline->step(WorkBudget(budget_us, WorkBudget::thread_cpu_clock(), &cancel_));
-    }
+    // The step stops at its budget; the watchdog only catches a runaway evaluation.
+    auto guard = arm_eval_limit();
+    return pipeline.step(WorkBudget(budget_us, WorkBudget::thread_cpu_clock(), &cancel_));
+}
+
+MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) {
+    unconfirmed_.reset();
+    first_mesh_key_.reset();
+    if (!shown_ && services_.first_meshes && show_cached_first_mesh(inbox, version))
+        return Start::restarted;
+    auto pipeline = make_pipeline(version);
+    const PipelineStep first = first_step(*pipeline);
     if (!pipeline->started()) {
         if (!timed_out_) return Start::superseded;
         fail(ErrorCode::eval_timeout, timeout_message(services_.settings.eval_timeout),
@@ -345,7 +361,16 @@ MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) 
         protocol::QuantizationGrid::for_box(version.state.box, services_.settings.position_bits);
     encoding_.encoding_speed = services_.settings.encoding_speed;
     converged_ = first.converged;
-    replace_mesh(inbox, version.state.version, first.converged);
+    std::array<std::shared_ptr<const Bytes>, 2> frames;
+    replace_mesh(inbox, version.state.version, first.converged, &frames);
+    if (first_mesh_key_ && !first.converged) remember_first_mesh(frames);
+    first_mesh_key_.reset();
+    record_first_mesh(version);
+    return Start::restarted;
+}
+
+void MeshSession::record_first_mesh(const FunctionVersion& version) {
+    shown_ = true;
     const Clock::time_point now = Clock::now();
     first_mesh_ms_ = milliseconds_between(version.requested, now);
     services_.metrics.first_mesh_seconds.observe(seconds_between(version.requested, now));
@@ -353,8 +378,81 @@ MeshSession::Start MeshSession::restart(FunctionVersion& version, Inbox& inbox) 
                                           {"version", version.state.version},
                                           {"triangles", wire_.triangle_count()},
                                           {"latency_ms", first_mesh_ms_},
-                                          {"resolving", pipeline_->status().resolving}});
-    return Start::restarted;
+                                          {"cached", unconfirmed_ != nullptr}});
+}
+
+bool MeshSession::show_cached_first_mesh(Inbox& inbox, const FunctionVersion& version) {
+    unsigned protocols = 0;
+    for (const LiveSubscriber& s : inbox.subscribers) protocols |= 1u << protocol_index(s.client);
+    if (protocols == 0) return false;
+    first_mesh_key_ = first_mesh_key(version, protocols);
+    if (!first_mesh_key_) return false;
+    std::shared_ptr<const FirstMesh> first = services_.first_meshes->find(*first_mesh_key_);
+    if (!first) {
+        services_.metrics.first_mesh_cache_misses.add();
+        // Kept the second time it is asked for (first_mesh_cache.h).
+        if (!services_.first_meshes->seen_before(*first_mesh_key_)) first_mesh_key_.reset();
+        return false;
+    }
+    services_.metrics.first_mesh_cache_hits.add();
+    first_mesh_key_.reset();
+    // The pipeline makes its first step in the next turn (refine_turn), to confirm this mesh.
+    pipeline_ = make_pipeline(version);
+    unconfirmed_ = first;
+    encoding_.grid =
+        protocol::QuantizationGrid::for_box(version.state.box, services_.settings.position_bits);
+    encoding_.encoding_speed = services_.settings.encoding_speed;
+    converged_ = false;
+    wire_ = first->wire;
+    wire_v2_ = first->wire_v2;
+    take_changes();
+    ++sequence_;
+    const Clock::time_point now = Clock::now();
+    const std::uint64_t timestamp = unix_time_us();
+    std::array<std::shared_ptr<const Bytes>, 2> frames;
+    for (const LiveSubscriber& s : inbox.subscribers) {
+        const int index = protocol_index(s.client);
+        if (!frames[index])
+            frames[index] = std::make_shared<const Bytes>(
+                protocol::with_session(*first->keyframes[index], id_, timestamp));
+        push_keyframes({s}, frames[index], now);
+    }
+    wire_version_ = version.state.version;
+    last_frame_converged_ = false;
+    inbox.keyframes.clear();
+    last_flush_ = now;
+    if (first->progress.resolving) broadcast(inbox.subscribers, first->progress, sequence_, true);
+    record_first_mesh(version);
+    return true;
+}
+
+void MeshSession::remember_first_mesh(const std::array<std::shared_ptr<const Bytes>, 2>& frames) {
+    auto first = std::make_shared<FirstMesh>();
+    first->mesh = pipeline_->mesh();
+    first->wire = wire_;
+    first->wire_v2 = wire_v2_;
+    first->keyframes = frames;
+    first->progress = statistics<protocol::Progress>();
+    first->progress.resolving = pipeline_->status().resolving;
+    measure(*first, *first_mesh_key_);
+    services_.first_meshes->insert(*first_mesh_key_, std::move(first));
+    services_.metrics.first_mesh_cache_entries.set(
+        static_cast<std::int64_t>(services_.first_meshes->entries()));
+    services_.metrics.first_mesh_cache_bytes.set(
+        static_cast<std::int64_t>(services_.first_meshes->bytes()));
+}
+
+bool MeshSession::shown_mesh_confirmed() {
+    const std::shared_ptr<const FirstMesh> shown = std::exchange(unconfirmed_, nullptr);
+    if (!shown) return false;
+    const RefinedMesh own = pipeline_->mesh();
+    const RefinedMesh& cached = shown->mesh;
+    const bool same =
+        own.triangle_ids == cached.triangle_ids && own.vertex_ids == cached.vertex_ids &&
+        own.mesh.triangles == cached.mesh.triangles &&
+        own.mesh.positions == cached.mesh.positions && own.mesh.normals == cached.mesh.normals;
+    if (!same) services_.metrics.first_mesh_cache_mismatches.add();
+    return same;
 }
 
 void MeshSession::limit_phase1(Clock::duration spent) {
@@ -383,8 +481,7 @@ bool MeshSession::wait_for_rest() {
     return true;
 }
 
-bool MeshSession::refine_turn(Inbox& inbox) {
-    if (wait_for_rest()) return false;
+PipelineStep MeshSession::step_pipeline() {
     // A new version's vertices on their way to its surface: the user waits for that frame, so the
     // turn may take the first mesh's budget (the pipeline's step ends once they are all moved).
     const Clock::duration slice =
@@ -397,25 +494,38 @@ bool MeshSession::refine_turn(Inbox& inbox) {
         auto guard = arm_eval_limit();
         step = pipeline_->step(budget);
     }
+    limit_phase1(std::chrono::microseconds(budget.elapsed()));
+    return step;
+}
+
+PipelineStep MeshSession::confirm_first_mesh(Inbox& inbox) {
+    PipelineStep step = first_step(*pipeline_);
+    if (pipeline_->started() && !shown_mesh_confirmed())
+        replace_mesh(inbox, current_.state.version, step.converged && !step.cancelled);
+    return step;
+}
+
+bool MeshSession::refine_turn(Inbox& inbox) {
+    if (wait_for_rest()) return false;
+    // After a cached first mesh, the pipeline's own first step (confirm_first_mesh).
+    const bool first = !pipeline_->started();
+    PipelineStep step = first ? confirm_first_mesh(inbox) : step_pipeline();
     if (timed_out_) {
         fail(ErrorCode::eval_timeout, timeout_message(services_.settings.eval_timeout),
              current_.request_id);
         return false;
     }
-    limit_phase1(std::chrono::microseconds(budget.elapsed()));
     services_.metrics.splits.add(step.splits);
     services_.metrics.merges.add(step.merges);
     splits_since_progress_ += step.splits;
     // The step's changes are the mesh's, cancelled or not: the next frames build on them.
-    if (step.restarted) {
+    if (first) {
+        // confirm_first_mesh sent what was needed.
+    } else if (step.restarted) {
         // Phase 1 resolved more of the topology: the whole mesh is replaced.
         replace_mesh(inbox, current_.state.version, step.converged && !step.cancelled);
     } else {
-        gather(pending_, step.delta);
-        const MeshDelta& d = step.delta;
-        pending_changes_ += d.added_triangles.size() + d.removed_triangles.size() +
-                            d.added_vertices.size() + d.moved_vertices.size() +
-                            d.removed_vertices.size();
+        add_changes(std::move(step.delta));
     }
     if (step.cancelled) return true;  // a new version or a close waits in the inbox
     converged_ = step.converged;

@@ -29,6 +29,7 @@
 // longer than the evaluation limit in CPU time fails the session too (eval_timeout).
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <functional>
 #include <limits>
@@ -41,6 +42,7 @@
 #include "protocol/frame.h"
 #include "protocol/messages.h"
 #include "server/client.h"
+#include "server/first_mesh_cache.h"
 #include "server/function_version.h"
 #include "server/log.h"
 #include "server/metrics.h"
@@ -81,6 +83,8 @@ struct SessionServices {
     Metrics& metrics;
     Logger& logger;
     SessionSettings settings;
+    /// New sessions' first meshes by request (first_mesh_cache.h); null: none kept.
+    FirstMeshCache* first_meshes = nullptr;
 };
 
 /// A session's ids, and its serial number (the order of creation: what logs name, since the ids
@@ -215,17 +219,39 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     bool end_subscriptions(protocol::Closed::Reason reason);
     Start start_version(FunctionVersion version, Inbox& inbox);
     Start restart(FunctionVersion& version, Inbox& inbox);
+    std::unique_ptr<Pipeline> make_pipeline(const FunctionVersion& version) const;
+    /// The pipeline's first step (the first mesh's budget, under the evaluation limit).
+    PipelineStep first_step(Pipeline& pipeline);
+    /// A new session whose request's first mesh is cached: sends it at once (the pipeline's own
+    /// first step follows in the next turn, first_mesh_cache.h). False when none is cached.
+    bool show_cached_first_mesh(Inbox& inbox, const FunctionVersion& version);
+    /// Keeps the first mesh just shown for the next session asking for the same.
+    void remember_first_mesh(const std::array<std::shared_ptr<const Bytes>, 2>& frames);
+    /// After the pipeline's own first step, when a cached first mesh was shown: true when it is
+    /// the mesh shown (else the caller shows its own).
+    bool shown_mesh_confirmed();
+    void record_first_mesh(const FunctionVersion& version);
     bool refine_turn(Inbox& inbox);
+    /// One step of the pipeline for a turn's time slice.
+    PipelineStep step_pipeline();
+    /// The pipeline's own first step after a cached first mesh, its mesh sent if it differs.
+    PipelineStep confirm_first_mesh(Inbox& inbox);
     /// Until when the work on `version` (about to replace current_) waits for its value to rest.
     Clock::time_point rest_deadline(const FunctionVersion& version) const;
     /// True when the current version's work waits for its value to rest (a turn is booked then).
     bool wait_for_rest();
-    /// Sends the pipeline's whole mesh as a keyframe to every subscriber, as the next frame.
-    void replace_mesh(Inbox& inbox, std::uint32_t version, bool converged);
+    /// Sends the pipeline's whole mesh as a keyframe to every subscriber, as the next frame;
+    /// `frames` (optional) receives the keyframe by protocol version.
+    void replace_mesh(Inbox& inbox, std::uint32_t version, bool converged,
+                      std::array<std::shared_ptr<const Bytes>, 2>* made = nullptr);
     /// Stops phase 1 for good once it used the version's time limit.
     void limit_phase1(Clock::duration spent);
     void serve_keyframes(const std::vector<KeyframeRequest>& requests);
     void flush(const Inbox& inbox, bool converged);
+    /// Adds a step's changes to those of the next frame.
+    void add_changes(MeshDelta delta);
+    /// The net changes since the last frame; forgets them.
+    MeshDelta take_changes();
     /// A `progress` or `converged` message with the mesh's statistics filled in.
     template <class Message>
     Message statistics() const;
@@ -252,6 +278,7 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     std::atomic<bool> timed_out_{false};  // raised by the watchdog with cancel_
     std::atomic<bool> cpu_spent_{false};  // the session's CPU budget ran out during a turn
     std::atomic<Clock::rep> cpu_time_{0};
+    std::atomic<bool> shown_{false};  // a first mesh went out: requests are no longer a new one's
     std::atomic<std::uint64_t> memory_estimate_{0};
 
     // The inbox, guarded by mutex_.
@@ -274,8 +301,13 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     protocol::MeshEncoding encoding_;
     WireMesh wire_;
     WireMeshV2 wire_v2_;  // what version-2 subscribers hold
+    // The changes since the last frame: one step's delta as the pipeline netted it (a frame of
+    // one step, such as a slider's moved frame, is not netted again), or the deltas of several
+    // steps netted together in pending_.
+    std::optional<MeshDelta> pending_step_;
     DeltaBuilder pending_;
-    std::size_t pending_changes_ = 0;  // triangles and vertices changed in pending_
+    bool pending_logged_ = false;      // pending_ holds changes
+    std::size_t pending_changes_ = 0;  // triangles and vertices changed since the last frame
     bool version_frame_due_ = false;   // a new version's first frame goes out as soon as it can
     Clock::time_point rest_until_{};   // a dragged value's work waits until then (rest_interval)
     // Incremented before each frame: unsigned wrap-around makes the first keyframe's number 0
@@ -291,7 +323,11 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     /// A keyframe shown while resolving: the next turn sends `progress` whatever the interval.
     bool progress_due_ = false;
     bool last_frame_converged_ = false;  // the last frame sent carries the converged flag
-    std::uint32_t wire_version_ = 0;     // the function version of wire_'s content
+    // A new session's first mesh: the cache key of its request, and the cached mesh shown while
+    // the pipeline's own first step has not run yet (first_mesh_cache.h).
+    std::optional<std::string> first_mesh_key_;
+    std::shared_ptr<const FirstMesh> unconfirmed_;
+    std::uint32_t wire_version_ = 0;  // the function version of wire_'s content
 };
 
 }  // namespace isomesh::server

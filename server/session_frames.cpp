@@ -11,22 +11,35 @@
 #include "server/session.h"
 
 namespace isomesh::server {
+namespace {
 
-void MeshSession::replace_mesh(Inbox& inbox, std::uint32_t version, bool converged) {
+/// Adds a refiner step's changes to the batch being gathered for the next delta.
+void gather(DeltaBuilder& batch, const MeshDelta& delta) {
+    for (std::uint32_t id : delta.removed_triangles) batch.remove_triangle(id);
+    for (std::uint32_t id : delta.removed_vertices) batch.remove_vertex(id);
+    for (const DeltaVertex& v : delta.added_vertices) batch.add_vertex(v);
+    for (const DeltaVertex& v : delta.moved_vertices) batch.move_vertex(v);
+    for (const DeltaTriangle& t : delta.added_triangles) batch.add_triangle(t);
+}
+
+}  // namespace
+
+void MeshSession::replace_mesh(Inbox& inbox, std::uint32_t version, bool converged,
+                               std::array<std::shared_ptr<const Bytes>, 2>* made) {
     const RefinedMesh mesh = pipeline_->mesh();
     wire_.reset(mesh.mesh, mesh.triangle_ids, mesh.vertex_ids);
-    pending_.take();
-    pending_changes_ = 0;
+    take_changes();
     prepare_v2(inbox.subscribers, true);
     ++sequence_;
     const Clock::time_point now = Clock::now();
     const std::uint16_t flags = converged ? protocol::frame_flags::converged : 0;
-    std::shared_ptr<const Bytes> frames[2];  // by protocol version, made on first use
+    std::array<std::shared_ptr<const Bytes>, 2> frames;  // by protocol version, made on first use
     for (const LiveSubscriber& s : inbox.subscribers) {
         const int index = protocol_index(s.client);
         if (!frames[index]) frames[index] = encode_keyframe(flags, version, index + 1);
         push_keyframes({s}, frames[index], now);
     }
+    if (made) *made = frames;
     wire_version_ = version;
     last_frame_converged_ = converged;
     // A mesh shown while phase 1 still resolves may be replaced: clients learn it at once, not a
@@ -34,6 +47,26 @@ void MeshSession::replace_mesh(Inbox& inbox, std::uint32_t version, bool converg
     progress_due_ = pipeline_->status().resolving;
     inbox.keyframes.clear();  // every subscriber just got this one
     last_flush_ = now;
+}
+
+void MeshSession::add_changes(MeshDelta delta) {
+    pending_changes_ += delta.added_triangles.size() + delta.removed_triangles.size() +
+                        delta.added_vertices.size() + delta.moved_vertices.size() +
+                        delta.removed_vertices.size();
+    if (!pending_step_ && !pending_logged_) {
+        pending_step_ = std::move(delta);
+        return;
+    }
+    if (pending_step_) gather(pending_, *std::exchange(pending_step_, std::nullopt));
+    gather(pending_, delta);
+    pending_logged_ = true;
+}
+
+MeshDelta MeshSession::take_changes() {
+    pending_changes_ = 0;
+    if (pending_step_) return *std::exchange(pending_step_, std::nullopt);
+    pending_logged_ = false;
+    return pending_.take();
 }
 
 const std::shared_ptr<const Bytes>& MeshSession::frame_for(protocol::Access access,
@@ -98,8 +131,7 @@ void MeshSession::flush(const Inbox& inbox, bool converged) {
     // converged, so that the frame a `converged` message names always carries the flag.
     const bool announce = converged && !last_frame_converged_;
     if (pending_changes_ == 0 && !announce) return;
-    pending_changes_ = 0;
-    const MeshDelta delta = pending_.take();
+    const MeshDelta delta = take_changes();
     // Without a version-1 subscriber, the version-1 mirror follows the refiner without making a
     // frame: re-sending every triangle around moved vertices in Draco costs tens of milliseconds
     // a slider step, and a version-1 client that subscribes later gets a keyframe first.

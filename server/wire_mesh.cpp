@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cassert>
-#include <unordered_set>
+
+#include <absl/container/flat_hash_set.h>
 
 namespace isomesh::server {
 namespace {
@@ -53,7 +54,7 @@ WireDelta WireMesh::apply(const MeshDelta& delta) {
         add(t.id, t.vertices);
     }
     if (!delta.moved_vertices.empty()) {
-        std::unordered_set<std::uint32_t> moved;
+        absl::flat_hash_set<std::uint32_t> moved;
         for (const DeltaVertex& v : delta.moved_vertices) {
             vertices_[v.id] = wire_vertex(v.id, v.position, v.normal);
             moved.insert(v.id);
@@ -73,7 +74,7 @@ WireDelta WireMesh::apply(const MeshDelta& delta) {
     }
     std::sort(content.removed.begin(), content.removed.end());
 
-    std::unordered_set<std::uint32_t> used;
+    absl::flat_hash_set<std::uint32_t> used;
     for (const protocol::Triangle& t : content.triangles) {
         for (std::uint32_t v : t.vertices) {
             if (used.insert(v).second) content.vertices.push_back(vertices_.at(v));
@@ -116,7 +117,7 @@ KeyframeContent WireMesh::keyframe() const {
               [](const auto& a, const auto& b) { return a.first < b.first; });
 
     KeyframeContent content;
-    std::unordered_set<std::uint32_t> used;
+    absl::flat_hash_set<std::uint32_t> used;
     for (const auto& [wire_id, triangle] : order) {
         assert(wire_id != kUnassigned);
         content.triangles.push_back({triangle->vertices});

@@ -10,10 +10,10 @@
 #include <array>
 #include <cstdint>
 #include <span>
-#include <unordered_map>
 #include <vector>
 
 #include "mesh/mesh.h"
+#include "protocol/held_mesh.h"
 #include "protocol/mesh_codec.h"
 #include "refine/mesh_delta.h"
 
@@ -80,8 +80,8 @@ class WireMesh {
     };
     static constexpr std::uint64_t kUnassigned = ~std::uint64_t{0};
 
-    std::unordered_map<std::uint32_t, LiveTriangle> triangles_;  // by refiner id
-    std::unordered_map<std::uint32_t, protocol::Vertex> vertices_;
+    protocol::IdTable<std::uint32_t, LiveTriangle> triangles_;  // by refiner id
+    protocol::IdTable<std::uint32_t, protocol::Vertex> vertices_;
     std::uint64_t next_wire_id_ = 0;
 };
 

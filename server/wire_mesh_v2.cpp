@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include <absl/container/flat_hash_set.h>
+
 #include "protocol/delta_v2_geometry.h"
 
 namespace isomesh::server {
@@ -19,34 +21,62 @@ protocol::Vertex as_decoded(std::uint32_t id, const protocol::Vertex& v,
 void WireMeshV2::reset(const RefinerMesh& mesh, const protocol::QuantizationGrid& grid) {
     grid_ = grid;
     const protocol::GridMath math(grid);
+    held_.clear();
     triangle_of_.clear();
     refiner_of_.clear();
     vertex_of_.clear();
-    protocol::DecodedFrame content;
-    content.header.kind = protocol::FrameKind::keyframe;
+    vertex_of_.reserve(mesh.vertices.size());
+    Staged staged;
+    staged.content.header.kind = protocol::FrameKind::keyframe;
+    staged.content.vertices.reserve(mesh.vertices.size());
     for (const protocol::Vertex& v : mesh.vertices) {
         vertex_of_[v.id] = next_vertex_;
-        content.vertices.push_back(as_decoded(next_vertex_++, v, math));
+        staged.content.vertices.push_back(as_decoded(next_vertex_++, v, math));
     }
+    staged.first_id = next_triangle_;
+    staged.content.triangles.reserve(mesh.triangles.size());
+    staged.refiners.reserve(mesh.triangles.size());
     for (const auto& [refiner_id, t] : mesh.triangles) {
         const auto& c = t.vertices;
-        const std::uint64_t id = next_triangle_++;
-        triangle_of_[refiner_id] = id;
-        refiner_of_[id] = refiner_id;
-        content.triangles.push_back(
-            {id, {vertex_of_.at(c[0]), vertex_of_.at(c[1]), vertex_of_.at(c[2])}});
+        staged.content.triangles.push_back(
+            {next_triangle_++, {vertex_of_.at(c[0]), vertex_of_.at(c[1]), vertex_of_.at(c[2])}});
+        staged.refiners.push_back(refiner_id);
     }
-    held_.apply(content);
+    staged_ = std::move(staged);
     valid_ = true;
     renumberable_ = true;
 }
 
+void WireMeshV2::commit() {
+    if (!staged_) return;
+    const std::vector<protocol::FrameTriangle>& triangles = staged_->content.triangles;
+    triangle_of_.reserve(triangles.size());
+    refiner_of_.reserve(triangles.size());
+    for (std::size_t i = 0; i < triangles.size(); ++i) {
+        triangle_of_[staged_->refiners[i]] = triangles[i].id;
+        refiner_of_[triangles[i].id] = staged_->refiners[i];
+    }
+    held_.apply(staged_->content);
+    staged_.reset();
+}
+
 void WireMeshV2::renumber(std::span<const std::uint64_t> from, std::span<const std::uint64_t> to) {
+    if (staged_) {
+        // Not built yet: the staged triangles take their final ids, then go in once.
+        auto& triangles = staged_->content.triangles;
+        for (std::size_t i = 0; i < from.size(); ++i) {
+            triangles[from[i] - staged_->first_id].id = to[i];
+            next_triangle_ = std::max(next_triangle_, to[i] + 1);
+        }
+        commit();
+        renumberable_ = false;
+        return;
+    }
     protocol::DecodedFrame content;
     content.header.kind = protocol::FrameKind::keyframe;
     for (const auto& [id, v] : held_.vertices()) content.vertices.push_back(v);
-    std::unordered_map<std::uint32_t, std::uint64_t> triangle_of;
-    std::unordered_map<std::uint64_t, std::uint32_t> refiner_of;
+    protocol::IdTable<std::uint32_t, std::uint64_t> triangle_of;
+    protocol::IdTable<std::uint64_t, std::uint32_t> refiner_of;
     for (std::size_t i = 0; i < from.size(); ++i) {
         content.triangles.push_back({to[i], *held_.triangle(from[i])});
         const std::uint32_t refiner = refiner_of_.at(from[i]);
@@ -62,6 +92,7 @@ void WireMeshV2::renumber(std::span<const std::uint64_t> from, std::span<const s
 
 protocol::Result<protocol::EncodedDeltaV2> WireMeshV2::encode(const protocol::FrameInfo& info,
                                                               const MeshDelta& delta) {
+    commit();
     protocol::DeltaV2Change change;
     for (std::uint32_t id : delta.removed_triangles) {
         const auto it = triangle_of_.find(id);
@@ -69,7 +100,7 @@ protocol::Result<protocol::EncodedDeltaV2> WireMeshV2::encode(const protocol::Fr
         refiner_of_.erase(it->second);
         triangle_of_.erase(it);
     }
-    std::unordered_map<std::uint32_t, std::uint32_t> provisional;
+    protocol::IdTable<std::uint32_t, std::uint32_t> provisional;
     for (const DeltaVertex& v : delta.added_vertices) {
         const auto id = static_cast<std::uint32_t>(next_vertex_ + change.new_vertices.size());
         provisional[v.id] = id;
@@ -113,14 +144,23 @@ protocol::Result<protocol::EncodedDeltaV2> WireMeshV2::encode(const protocol::Fr
 
 KeyframeContent WireMeshV2::keyframe() const {
     KeyframeContent content;
+    if (staged_) {
+        // In id order already; every vertex once (those no triangle uses are ignored).
+        content.vertices = staged_->content.vertices;
+        for (const protocol::FrameTriangle& t : staged_->content.triangles) {
+            content.wire_ids.push_back(t.id);
+            content.triangles.push_back({t.vertices});
+        }
+        return content;
+    }
     for (const auto& [id, c] : held_.triangles()) content.wire_ids.push_back(id);
     std::sort(content.wire_ids.begin(), content.wire_ids.end());
-    std::unordered_map<std::uint32_t, bool> listed;
+    absl::flat_hash_set<std::uint32_t> listed;
     for (std::uint64_t id : content.wire_ids) {
         const auto& c = *held_.triangle(id);
         content.triangles.push_back({c});
         for (std::uint32_t v : c) {
-            if (listed.emplace(v, true).second) content.vertices.push_back(*held_.vertex(v));
+            if (listed.insert(v).second) content.vertices.push_back(*held_.vertex(v));
         }
     }
     return content;

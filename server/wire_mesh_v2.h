@@ -6,8 +6,9 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
-#include <unordered_map>
+#include <vector>
 
 #include "protocol/delta_v2.h"
 #include "protocol/held_mesh.h"
@@ -39,20 +40,36 @@ class WireMeshV2 {
     /// renumberable(), `from` lists every triangle.
     void renumber(std::span<const std::uint64_t> from, std::span<const std::uint64_t> to);
     /// A frame was made from the mirror: its ids are now the clients'.
-    void sent() { renumberable_ = false; }
+    void sent() {
+        commit();
+        renumberable_ = false;
+    }
 
     /// False after invalidate(): frames went out that this mirror did not follow (no version-2
     /// subscriber then), so the next version-2 keyframe must come from reset().
     bool valid() const { return valid_; }
     void invalidate() { valid_ = false; }
-    std::size_t triangle_count() const { return held_.triangle_count(); }
+    std::size_t triangle_count() const {
+        return staged_ ? staged_->content.triangles.size() : held_.triangle_count();
+    }
 
   private:
+    /// reset()'s mesh before it goes into held_: a first keyframe renumbers its triangles, so it is
+    /// built once, under the final ids (a session's first frame is most of its first turn).
+    struct Staged {
+        protocol::DecodedFrame content;       ///< triangle i: id first_id + i
+        std::vector<std::uint32_t> refiners;  ///< refiner id of triangle i
+        std::uint64_t first_id = 0;
+    };
+    /// Puts the staged mesh into held_ under its ids.
+    void commit();
+
+    std::optional<Staged> staged_;
     protocol::HeldMesh held_;
     protocol::QuantizationGrid grid_;
-    std::unordered_map<std::uint32_t, std::uint64_t> triangle_of_;  // refiner -> wire
-    std::unordered_map<std::uint64_t, std::uint32_t> refiner_of_;   // wire -> refiner
-    std::unordered_map<std::uint32_t, std::uint32_t> vertex_of_;    // refiner -> wire
+    protocol::IdTable<std::uint32_t, std::uint64_t> triangle_of_;  // refiner -> wire
+    protocol::IdTable<std::uint64_t, std::uint32_t> refiner_of_;   // wire -> refiner
+    protocol::IdTable<std::uint32_t, std::uint32_t> vertex_of_;    // refiner -> wire
     std::uint64_t next_triangle_ = 0;
     std::uint32_t next_vertex_ = 0;
     bool valid_ = false;

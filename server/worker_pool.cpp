@@ -43,44 +43,64 @@ std::optional<Clock::time_point> WorkerPool::release_due(Clock::time_point now) 
 }
 
 void WorkerPool::schedule_locked(const std::shared_ptr<Task>& task, Lane lane) {
-    const bool urgent = lane == Lane::urgent;
     switch (task->state_) {
         case Task::State::idle:
-            task->urgent_ = urgent;
+            task->lane_ = lane;
             enqueue(task);
             break;
         case Task::State::running:
             task->state_ = Task::State::running_rescheduled;
-            task->urgent_ = urgent;
+            task->lane_ = lane;
             break;
         case Task::State::queued:
-            if (urgent && !task->urgent_) promote(task);
+            if (lane != Lane::round_robin && task->lane_ == Lane::round_robin) promote(task, lane);
             break;
         case Task::State::running_rescheduled:
-            task->urgent_ = task->urgent_ || urgent;
+            if (task->lane_ == Lane::round_robin) task->lane_ = lane;
             break;
     }
 }
 
+std::deque<std::shared_ptr<Task>>& WorkerPool::queue_of(Lane lane) {
+    switch (lane) {
+        case Lane::urgent:
+            return urgent_;
+        case Lane::new_session:
+            return new_sessions_;
+        case Lane::round_robin:
+            break;
+    }
+    return queue_;
+}
+
 void WorkerPool::enqueue(const std::shared_ptr<Task>& task) {
     task->state_ = Task::State::queued;
-    (task->urgent_ ? urgent_ : queue_).push_back(task);
+    queue_of(task->lane_).push_back(task);
     if (metrics_) metrics_->run_queue.add(1);
     wake_.notify_one();
 }
 
-void WorkerPool::promote(const std::shared_ptr<Task>& task) {
+void WorkerPool::promote(const std::shared_ptr<Task>& task, Lane lane) {
     const auto it = std::find(queue_.begin(), queue_.end(), task);
     assert(it != queue_.end());
     queue_.erase(it);
-    task->urgent_ = true;
-    urgent_.push_back(task);
+    task->lane_ = lane;
+    queue_of(lane).push_back(task);
 }
 
 std::shared_ptr<Task> WorkerPool::next_task() {
-    auto& lane = urgent_.empty() ? queue_ : urgent_;
-    std::shared_ptr<Task> task = std::move(lane.front());
-    lane.pop_front();
+    auto* lane = &queue_;
+    if (!urgent_.empty() && !new_sessions_.empty()) {
+        // Both wait on a user: they take turns.
+        lane = new_session_next_ ? &new_sessions_ : &urgent_;
+        new_session_next_ = !new_session_next_;
+    } else if (!urgent_.empty()) {
+        lane = &urgent_;
+    } else if (!new_sessions_.empty()) {
+        lane = &new_sessions_;
+    }
+    std::shared_ptr<Task> task = std::move(lane->front());
+    lane->pop_front();
     return task;
 }
 
@@ -89,7 +109,7 @@ void WorkerPool::stop() {
         std::lock_guard lock(mutex_);
         if (stopping_ && threads_.empty()) return;
         stopping_ = true;
-        for (auto* lane : {&urgent_, &queue_}) {
+        for (auto* lane : {&urgent_, &new_sessions_, &queue_}) {
             if (metrics_) metrics_->run_queue.add(-static_cast<std::int64_t>(lane->size()));
             for (auto& task : *lane) task->state_ = Task::State::idle;
             lane->clear();
@@ -109,7 +129,7 @@ bool WorkerPool::wait_idle(Clock::time_point deadline) {
 
 std::size_t WorkerPool::queued() const {
     std::lock_guard lock(mutex_);
-    return urgent_.size() + queue_.size();
+    return urgent_.size() + new_sessions_.size() + queue_.size();
 }
 
 void WorkerPool::work() {
@@ -147,8 +167,8 @@ void WorkerPool::finish_turn(const std::shared_ptr<Task>& task, bool wants_more)
     if (metrics_) metrics_->busy_workers.add(-1);
     --running_;
     const bool rescheduled = task->state_ == Task::State::running_rescheduled;
-    // Only a schedule() during the turn keeps the urgent lane; a continuation is round-robin.
-    task->urgent_ = rescheduled && task->urgent_;
+    // Only a schedule() during the turn keeps its lane; a continuation is round-robin.
+    if (!rescheduled) task->lane_ = Lane::round_robin;
     if ((wants_more || rescheduled) && !stopping_) {
         enqueue(task);
     } else {

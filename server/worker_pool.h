@@ -3,10 +3,13 @@
 // heavy model cannot starve a light one: with T tasks wanting work, each waits at most T - 1
 // turns between two of its own. A task is never run by two threads at once.
 //
-// Two lanes: work a user is waiting for (a new session's first mesh, a slider's new version, a
-// keyframe for a late subscriber) is scheduled in the urgent lane, served before any round-robin
-// turn, so its latency is one turn of the busiest worker rather than a whole round over every
-// refining session. Continuation turns always go to the round-robin lane.
+// Three lanes: work a user of a running session is waiting for (a slider's new version, a
+// keyframe for a late subscriber) is scheduled in the urgent lane and a new session's first mesh
+// in the new-session lane; both are served before any round-robin turn, so their latency is one
+// turn of the busiest worker rather than a whole round over every refining session. While both
+// have work they take turns, so that a burst of new sessions cannot hold up the running sessions'
+// updates, nor a dragged slider the first meshes. Continuation turns always go to the round-robin
+// lane.
 //
 // A task may also ask for a turn at a later time (schedule_at): a session waiting for a dragged
 // slider to rest. Until then it costs nothing; its turn then goes to the round-robin lane.
@@ -29,6 +32,8 @@
 
 namespace isomesh::server {
 
+enum class Lane { round_robin, urgent, new_session };
+
 class Task {
   public:
     virtual ~Task() = default;
@@ -39,11 +44,10 @@ class Task {
     friend class WorkerPool;
     enum class State { idle, queued, running, running_rescheduled };
     State state_ = State::idle;  // guarded by the pool's mutex
-    bool urgent_ = false;        // queued, or to be requeued, in the urgent lane; same guard
+    /// The lane it is queued in, or to be requeued in; same guard.
+    Lane lane_ = Lane::round_robin;
     std::optional<Clock::time_point> wake_at_;  // its entry in the pool's timers; same guard
 };
-
-enum class Lane { round_robin, urgent };
 
 class WorkerPool {
   public:
@@ -57,8 +61,8 @@ class WorkerPool {
     WorkerPool& operator=(const WorkerPool&) = delete;
 
     /// Gives `task` a turn soon: queues it in `lane` when idle; when it is running, it gets another
-    /// turn (in `lane`) after the current one; when queued, it moves to the urgent lane if `lane`
-    /// is urgent and otherwise stays. Thread-safe; ignored after stop().
+    /// turn (in `lane`) after the current one; when queued in the round-robin lane, it moves to
+    /// `lane`, and otherwise stays. Thread-safe; ignored after stop().
     void schedule(const std::shared_ptr<Task>& task, Lane lane = Lane::round_robin);
     /// Gives `task` a round-robin turn at `when` (as schedule() then), replacing a turn it asked
     /// for this way before. Thread-safe; ignored after stop().
@@ -76,13 +80,17 @@ class WorkerPool {
   private:
     void work();
     std::shared_ptr<Task> next_task();                // with the mutex held and a task queued
-    void enqueue(const std::shared_ptr<Task>& task);  // in the lane of task->urgent_
-    void promote(const std::shared_ptr<Task>& task);  // from the round-robin lane to urgent
+    void enqueue(const std::shared_ptr<Task>& task);  // in the lane of task->lane_
+    /// From the round-robin lane to `lane`.
+    void promote(const std::shared_ptr<Task>& task, Lane lane);
+    std::deque<std::shared_ptr<Task>>& queue_of(Lane lane);
     void finish_turn(const std::shared_ptr<Task>& task, bool wants_more);
     void schedule_locked(const std::shared_ptr<Task>& task, Lane lane);
     /// Queues the tasks whose time has come; returns when the next one is due.
     std::optional<Clock::time_point> release_due(Clock::time_point now);
-    bool nothing_queued() const { return urgent_.empty() && queue_.empty(); }
+    bool nothing_queued() const {
+        return urgent_.empty() && new_sessions_.empty() && queue_.empty();
+    }
     bool idle() const { return nothing_queued() && running_ == 0 && timers_.empty(); }
 
     mutable std::mutex mutex_;
@@ -90,7 +98,9 @@ class WorkerPool {
     std::condition_variable idle_;
     std::size_t running_ = 0;
     std::deque<std::shared_ptr<Task>> urgent_;
-    std::deque<std::shared_ptr<Task>> queue_;                               // the round-robin lane
+    std::deque<std::shared_ptr<Task>> new_sessions_;
+    bool new_session_next_ = false;            // whose turn it is while both lanes above have work
+    std::deque<std::shared_ptr<Task>> queue_;  // the round-robin lane
     std::set<std::pair<Clock::time_point, std::shared_ptr<Task>>> timers_;  // schedule_at
     bool stopping_ = false;
     Metrics* metrics_;

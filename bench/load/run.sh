@@ -11,7 +11,9 @@
 #
 # Settings (environment): SESSIONS (200), DURATION (30), SEARCH_DURATION (10), LIMIT_MS (100),
 # MAX_SESSIONS (1000), THREADS (isomesh-load's I/O threads, 2), UPDATES_PER_S (of each slider
-# session, 2), SERVER_ARGS (extra server flags),
+# session, 2), JITTER (isomesh-load --jitter: 0 asks every session of an entry for the same mesh,
+# which the server's first-mesh cache may answer; 0.01 gives each session a mesh of its own),
+# SERVER_ARGS (extra server flags, e.g. --first-mesh-cache 0 to measure without the cache),
 # SEARCH (1; 0 skips step 2), MIX (mix file of step 1; empty: the built-in gallery mix),
 # SEARCH_MIX (bench/load/light_mix.json), OUT (folder for the JSON reports, build/bench-load).
 # Traffic stays on 127.0.0.1; every run is bounded in sessions and time.
@@ -25,6 +27,7 @@ LIMIT_MS=${LIMIT_MS:-100}
 MAX_SESSIONS=${MAX_SESSIONS:-1000}
 THREADS=${THREADS:-2}
 UPDATES_PER_S=${UPDATES_PER_S:-2}
+JITTER=${JITTER:-0}
 SERVER_ARGS=${SERVER_ARGS:-}
 SEARCH=${SEARCH:-1}
 MIX=${MIX:-}
@@ -76,7 +79,7 @@ run_load() {
   [ -n "${4:-}" ] && mix_args=(--mix "$4")
   start_server
   "$BIN/isomesh-load" --url "ws://127.0.0.1:$port/ws" --sessions "$1" --duration "$2" \
-    --threads "$THREADS" --updates-per-s "$UPDATES_PER_S" --json "$3" "${mix_args[@]}" ||
+    --threads "$THREADS" --updates-per-s "$UPDATES_PER_S" --jitter "$JITTER" --json "$3" "${mix_args[@]}" ||
     true  # errors are in the report
   stop_server
 }

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 
@@ -122,6 +123,21 @@ const MixEntry& mix_entry(const Mix& mix, std::size_t user, std::size_t users, s
         slot -= entry.weight;
     }
     return mix.back();  // unreachable: slot < total_weight
+}
+
+MixEntry jittered(const MixEntry& entry, double jitter, std::uint64_t seed) {
+    std::mt19937_64 random(seed);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    MixEntry out = entry;
+    for (auto& [name, value] : out.create.parameters)
+        value += jitter * unit(random) * std::max(std::abs(value), 1.0);
+    protocol::Box& box = out.create.box;
+    for (int axis = 0; axis < 3; ++axis) {
+        const double size = box[2 * axis + 1] - box[2 * axis];
+        box[2 * axis] -= jitter * 0.5 * (1.0 + unit(random)) * size;
+        box[2 * axis + 1] += jitter * 0.5 * (1.0 + unit(random)) * size;
+    }
+    return out;
 }
 
 }  // namespace isomesh::load

@@ -54,4 +54,10 @@ Mix load_mix_file(const std::string& path);
 /// so the whole mix is used whatever the counts.
 const MixEntry& mix_entry(const Mix& mix, std::size_t user, std::size_t users, std::size_t round);
 
+/// `entry` with each parameter moved by up to `jitter` times its value (times 1 for values below
+/// 1) and its box grown by up to `jitter` times its size on every side, drawn from `seed`:
+/// sessions that ask for meshes of their own (a server's first-mesh cache misses), the same in
+/// every run.
+MixEntry jittered(const MixEntry& entry, double jitter, std::uint64_t seed);
+
 }  // namespace isomesh::load

@@ -68,6 +68,7 @@ ordered_json report_json(const LoadReport& report) {
     out["threads"] = o.threads;
     out["updates_per_s"] = o.user.updates_per_s;
     out["hold_s"] = o.user.hold_s;
+    out["jitter"] = o.user.jitter;
     out["mix"] = mix;
     out["time_to_first_mesh_ms"] = percentiles_json(s.first_mesh_ms);
     ordered_json by_entry = ordered_json::object();
@@ -101,8 +102,11 @@ std::string report_table(const LoadReport& report) {
     const LoadStats& s = report.stats;
     const LoadOptions& o = report.options;
     std::string out;
-    out += format("isomesh-load: %zu sessions on %s for %.1f s (%.1f s elapsed), %u threads\n",
-                  o.sessions, o.url.to_string().c_str(), o.duration_s, report.elapsed_s, o.threads);
+    out += format(
+        "isomesh-load: %zu sessions on %s for %.1f s (%.1f s elapsed), %u threads, "
+        "jitter %g\n",
+        o.sessions, o.url.to_string().c_str(), o.duration_s, report.elapsed_s, o.threads,
+        o.user.jitter);
     out +=
         format("%-28s %9s %9s %9s %9s %9s\n", "latency (ms)", "count", "p50", "p90", "p99", "max");
     out += percentiles_line("time to first mesh", s.first_mesh_ms);

@@ -21,7 +21,7 @@ using namespace isomesh::load;
 constexpr std::string_view kUsage =
     R"(usage: isomesh-load --url ws://HOST:PORT/ws [--sessions N] [--duration S] [--mix FILE]
                     [--updates-per-s R] [--hold S] [--ramp S] [--threads T]
-                    [--protocol-version V] [--json FILE]
+                    [--protocol-version V] [--jitter J] [--json FILE]
 
 Opens N sessions on an isomesh server, one WebSocket connection each, for S seconds: a mix of
 surfaces (the viewer's gallery by default), some moving a parameter like a slider. Decodes every
@@ -39,6 +39,10 @@ second, errors, and the server's /metrics before and after. Exits 1 if anything 
   --threads T         I/O threads, which also decode the frames (default 2)
   --protocol-version V  the protocol version the sessions speak: 2 (default: deltas carry only
                       what the client lacks, PROTOCOL.md 4.5) or 1
+  --jitter J          moves each session's parameters and box at random by up to J times their
+                      values (0 to 0.5; default 0): sessions of one mix entry then ask for
+                      meshes of their own, as distinct users would, instead of the same one
+                      (which a server may answer from its first-mesh cache)
   --json FILE         also write the report as JSON to FILE ('-': stdout, instead of the table)
 )";
 
@@ -47,7 +51,8 @@ constexpr OptionSpec kOptions[] = {
     {"duration", true, false},      {"mix", true, false},
     {"updates-per-s", true, false}, {"hold", true, false},
     {"ramp", true, false},          {"threads", true, false},
-    {"json", true, false},          {"protocol-version", true, false}};
+    {"json", true, false},          {"protocol-version", true, false},
+    {"jitter", true, false}};
 
 double option_number(const Arguments& args, std::string_view name, double fallback, double lo,
                      double hi, bool whole) {
@@ -80,6 +85,7 @@ LoadOptions parse_options(const Arguments& args) {
     options.threads = static_cast<unsigned>(option_number(args, "threads", 2, 1, 64, true));
     options.user.updates_per_s = option_number(args, "updates-per-s", 2, 0, 1000, false);
     options.user.hold_s = option_number(args, "hold", 2, 0, 3600, false);
+    options.user.jitter = option_number(args, "jitter", 0, 0, 0.5, false);
     options.user.protocol_version = static_cast<int>(
         option_number(args, "protocol-version", isomesh::protocol::kMaxProtocolVersion, 1,
                       isomesh::protocol::kMaxProtocolVersion, true));

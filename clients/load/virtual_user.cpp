@@ -32,10 +32,6 @@ VirtualUser::VirtualUser(const Mix& mix, std::size_t index, std::size_t users,
       settings_(settings),
       on_finished_(std::move(on_finished)) {}
 
-const MixEntry& VirtualUser::entry() const {
-    return mix_entry(mix_, index_, users_, round_);
-}
-
 void VirtualUser::start(net::WsEventLoop& loop, const net::Url& url) {
     auto self = shared_from_this();
     net::WsHandlers handlers;
@@ -67,6 +63,9 @@ void VirtualUser::send(const protocol::ClientMessage& message) {
 
 void VirtualUser::create_session() {
     if (stopping_) return;
+    entry_ = mix_entry(mix_, index_, users_, round_);
+    if (settings_.jitter > 0)
+        entry_ = jittered(entry_, settings_.jitter, (std::uint64_t{index_} << 32) ^ round_);
     protocol::Create create = entry().create;
     create_id_ = next_request_id_++;
     create.id = create_id_;

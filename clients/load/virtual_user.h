@@ -25,6 +25,9 @@ struct UserSettings {
     double updates_per_s = 2;  ///< per slider session; 0: sliders stay still
     double hold_s = 2;         ///< a converged static session lives this long; <= 0: to the end
     int protocol_version = protocol::kMaxProtocolVersion;  ///< of every message and frame
+    /// Each session's parameters and box moved at random by up to this share (load_mix.h
+    /// jittered); 0: every session of an entry asks for the same mesh.
+    double jitter = 0;
 };
 
 class VirtualUser : public std::enable_shared_from_this<VirtualUser> {
@@ -58,7 +61,8 @@ class VirtualUser : public std::enable_shared_from_this<VirtualUser> {
     void send_update();
     void recreate_later();
     void send(const protocol::ClientMessage& message);
-    const MixEntry& entry() const;
+    /// The mix entry of the current session, jittered.
+    const MixEntry& entry() const { return entry_; }
 
     const Mix& mix_;
     const std::size_t index_;
@@ -70,6 +74,7 @@ class VirtualUser : public std::enable_shared_from_this<VirtualUser> {
     // Everything below is touched only on the connection's strand.
     std::int64_t next_request_id_ = 1;
     std::size_t round_ = 0;  ///< how many sessions this user has created before the current one
+    MixEntry entry_;
     std::optional<protocol::SessionId> session_;
     std::int64_t create_id_ = 0;
     Clock::time_point create_sent_{};

@@ -226,10 +226,16 @@ std::vector<ValueGradient> Refiner::Impl::missing_gradients(const Mesh& mesh) {
 void Refiner::Impl::reserve_for(std::size_t root_triangles) {
     // Growing the pools by doubling maps fresh pages twice over (a quarter of the time of a
     // refinement from scratch went to page faults): make room for the budget at once, within
-    // reason (a bound far above what a mesh reaches does not reserve its memory).
+    // reason (a bound far above what a mesh reaches does not reserve its memory), and at most a
+    // few times the roots: a pool of 1 MB or more is on huge pages, each zeroed whole (2 MB) when
+    // first touched, and a server's new session starts from a few hundred roots under a budget of
+    // 20,000 (with 1,000 new sessions the kernel zeroing those pages was 54% of the server's CPU
+    // time, bench/load/run.sh). Beyond, the pools grow by doubling, on huge pages.
     constexpr std::size_t kMostReserved = 500'000;
-    const std::size_t leaves =
-        std::min(kMostReserved, std::max(root_triangles, constraint_.triangle_limit().value_or(0)));
+    constexpr std::size_t kRootGrowth = 4;
+    const std::size_t budget = constraint_.triangle_limit().value_or(0);
+    const std::size_t leaves = std::min(
+        kMostReserved, std::max(root_triangles, std::min(budget, kRootGrowth * root_triangles)));
     const std::size_t triangles = 2 * leaves + root_triangles;
     triangles_.reserve(triangles);
     vertices_.reserve(leaves / 2 + 3);

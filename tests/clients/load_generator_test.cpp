@@ -89,6 +89,22 @@ TEST(LoadMix, users_and_rounds_walk_the_weighted_entries) {
     EXPECT_EQ(mix_entry(mix, 1, 2, 1).name, "a");  // slot 3 = 0 modulo 3
 }
 
+TEST(LoadMix, jittered_moves_parameters_and_grows_the_box_reproducibly) {
+    const Mix mix = parse_mix(R"([{"expression": "x^2+y^2+z^2=a", "parameters": {"a": 4},
+                                   "box": [-3, 3, -3, 3, -3, 3]}])");
+    const MixEntry a = jittered(mix[0], 0.01, 7);
+    EXPECT_EQ(a.create, jittered(mix[0], 0.01, 7).create);  // the same seed, the same session
+    EXPECT_NE(a.create, jittered(mix[0], 0.01, 8).create);
+    EXPECT_NE(a.create.parameters.at("a"), 4.0);
+    EXPECT_NEAR(a.create.parameters.at("a"), 4.0, 0.04);
+    for (int axis = 0; axis < 3; ++axis) {
+        EXPECT_LE(a.create.box[2 * axis], -3.0);  // grown: the surface stays inside
+        EXPECT_GE(a.create.box[2 * axis], -3.06);
+        EXPECT_GE(a.create.box[2 * axis + 1], 3.0);
+        EXPECT_LE(a.create.box[2 * axis + 1], 3.06);
+    }
+}
+
 TEST(Percentiles, nearest_rank_picks_measured_samples) {
     std::vector<double> samples;
     for (int i = 100; i >= 1; --i) samples.push_back(i);

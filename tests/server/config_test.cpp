@@ -81,7 +81,8 @@ TEST(ParseConfig, help_is_requested_and_lists_every_variable) {
     EXPECT_TRUE(std::holds_alternative<HelpRequested>(parse({"--port", "1", "--help"})));
     const std::string usage = config_usage();
     for (const char* name : {"--port", "ISOMESH_PORT", "--queue-bytes", "ISOMESH_QUEUE_BYTES",
-                             "--eval-timeout-ms", "--first-mesh-ms", "ISOMESH_LOG_LEVEL"})
+                             "--eval-timeout-ms", "--first-mesh-ms", "--first-mesh-cache",
+                             "ISOMESH_FIRST_MESH_CACHE_MB", "ISOMESH_LOG_LEVEL"})
         EXPECT_NE(usage.find(name), std::string::npos) << name;
 }
 
@@ -96,6 +97,8 @@ TEST(ParseConfig, budgets_and_access_options) {
     EXPECT_DOUBLE_EQ(c.session_cpu_s, 2.5);
     EXPECT_EQ(c.max_http_connections, 32u);
     EXPECT_EQ(c.allow_origin, "https://app.example, http://localhost:5173");
+    EXPECT_EQ(parsed({"--first-mesh-cache", "0"}).first_mesh_cache, 0u);  // none kept
+    EXPECT_EQ(parsed({"--first-mesh-cache-mb", "8"}).first_mesh_cache_mb, 8u);
     EXPECT_GT(resolved_max_memory_bytes(parsed({})), 0u);  // 0: half the physical memory
     EXPECT_NE(error_of({"--allow-origin", "app.example"}).find("--allow-origin"),
               std::string::npos);

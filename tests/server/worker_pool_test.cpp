@@ -160,6 +160,31 @@ TEST(WorkerPool, schedule_urgent_promotes_a_queued_task) {
     EXPECT_EQ(held.release(), "ba");
 }
 
+TEST(WorkerPool, schedule_new_sessions_take_turns_with_urgent_work) {
+    HeldPool held;
+    held.pool.schedule(held.task(1, 'r'));
+    for (char name : {'a', 'b', 'c', 'd'})
+        held.pool.schedule(held.task(1, name), Lane::new_session);
+    held.pool.schedule(held.task(1, 'U'), Lane::urgent);
+    held.pool.schedule(held.task(1, 'V'), Lane::urgent);
+    // A burst of new sessions does not hold up the running sessions' urgent turns, nor they the
+    // first meshes; round-robin turns come after both.
+    EXPECT_EQ(held.release(), "UaVbcdr");
+}
+
+TEST(WorkerPool, schedule_new_session_promotes_a_queued_task_but_not_an_urgent_one) {
+    HeldPool held;
+    auto a = held.task(1, 'a');
+    auto u = held.task(1, 'U');
+    held.pool.schedule(held.task(1, 'r'));
+    held.pool.schedule(a);
+    held.pool.schedule(a, Lane::new_session);
+    held.pool.schedule(u, Lane::urgent);
+    held.pool.schedule(u, Lane::new_session);  // stays urgent
+    EXPECT_EQ(held.pool.queued(), 3u);
+    EXPECT_EQ(held.release(), "Uar");
+}
+
 TEST(WorkerPool, stop_drops_queued_work_and_joins) {
     auto pool = std::make_unique<WorkerPool>(2);
     std::vector<std::shared_ptr<CountingTask>> tasks;
