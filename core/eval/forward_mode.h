@@ -9,13 +9,16 @@
 #pragma once
 
 #include <cassert>
+#include <cmath>
 #include <numbers>
 #include <span>
 #include <vector>
 
 #include "eval/interval_math.h"
+#include "eval/interval_ranges.h"
 #include "eval/tape_arithmetic.h"
 #include "eval/tape_ops.h"
+#include "eval/tape_simplify.h"
 
 namespace isomesh::forward_mode {
 
@@ -92,8 +95,8 @@ struct Partials {
     T da, db;
 };
 
-/// (d op(a, b) / da, d op(a, b) / db) for the arithmetic operations (not min and max), from the
-/// operands and the result r = op(a, b).
+/// (d op(a, b) / da, d op(a, b) / db) for the arithmetic operations (not the choice operations
+/// min, max and logsumexp), from the operands and the result r = op(a, b).
 template <class T>
 Partials<T> binary_partials(Op op, const T& a, const T& b, const T& r) {
     auto c = [](double v) { return constant<T>(v); };
@@ -116,16 +119,18 @@ Partials<T> binary_partials(Op op, const T& a, const T& b, const T& r) {
             return {div(b, norm), neg(div(a, norm))};
         }
         default:
-            assert(!"min and max select a gradient instead");
+            assert(!"min, max and logsumexp select or blend gradients instead");
             return {c(0.0), c(0.0)};
     }
 }
 
-/// Which operand's gradient min or max takes.
+/// Which operand's gradient a choice operation (min, max, logsumexp) takes.
 enum class Pick { A, B, Either };
 
-/// At a point: the operand apply_binary returns (b on ties, as a < b ? a : b does).
+/// At a point: for min and max the operand apply_binary returns (b on ties, as a < b ? a : b
+/// does); for logsumexp the operand log_sum_exp returns unchanged, beyond kLogSumExpCutoff.
 inline Pick pick(Op op, double a, double b) {
+    if (op == Op::LogSumExp && !(std::fabs(a - b) > kLogSumExpCutoff)) return Pick::Either;
     return (op == Op::Min ? a < b : a > b) ? Pick::A : Pick::B;
 }
 
@@ -134,8 +139,8 @@ inline Pick pick(Op op, const IntervalValue& a, const IntervalValue& b) {
     const Interval& x = a.value;
     const Interval& y = b.value;
     if (x.is_empty() || y.is_empty()) return Pick::Either;
-    if (op == Op::Min ? x.hi < y.lo : x.lo > y.hi) return Pick::A;
-    if (op == Op::Min ? y.hi < x.lo : y.lo > x.hi) return Pick::B;
+    if (always_wins(op, x, y)) return Pick::A;
+    if (always_wins(op, y, x)) return Pick::B;
     return Pick::Either;
 }
 
@@ -145,6 +150,47 @@ inline double either(double a, double) {
 inline IntervalValue either(const IntervalValue& a, const IntervalValue& b) {
     return {hull(a.value, b.value), a.maybe_discontinuous || b.maybe_discontinuous,
             a.maybe_undefined || b.maybe_undefined};
+}
+
+/// logsumexp's partial derivatives at a point, the weights exp(a) / (exp(a) + exp(b)) and
+/// exp(b) / (exp(a) + exp(b)), from t = exp(-|a - b|) <= 1 (no overflow).
+inline Partials<double> log_sum_exp_weights(double a, double b) {
+    if (a == b) return {0.5, 0.5};  // also for equal infinities
+    const double t = std::exp(-std::fabs(a - b));
+    const double larger = 1.0 / (1.0 + t), smaller = t / (1.0 + t);
+    return a > b ? Partials<double>{larger, smaller} : Partials<double>{smaller, larger};
+}
+
+/// The derivative of logsumexp where neither operand wins outright (pick() is Either): at a
+/// point, the product rule with log_sum_exp_weights.
+inline double blend(double a, double b, double ga, double gb) {
+    const Partials<double> w = log_sum_exp_weights(a, b);
+    return term(w.da, ga) + term(w.db, gb);
+}
+
+/// Over a box: w ga + (1 - w) gb for a weight w in log_sum_exp_weight (interval_ranges.h), a
+/// convex combination. The product rule would treat w and 1 - w as unrelated and give up to twice
+/// the hull of ga and gb; this is within the hull, and near one operand's where w is near 0 or 1.
+/// For fixed w the extremes are at the ends of ga and gb, and each is linear in w, so at the ends
+/// of w. The slack covers the rounding of these formulas and of the point's weights, which sum to
+/// 1 within a few ulps.
+inline IntervalValue blend(const IntervalValue& a, const IntervalValue& b, const IntervalValue& ga,
+                           const IntervalValue& gb) {
+    const Interval w = interval_ranges::log_sum_exp_weight(a.value, b.value);
+    const Interval& g = ga.value;
+    const Interval& h = gb.value;
+    const bool discontinuous = ga.maybe_discontinuous || gb.maybe_discontinuous;
+    const bool undefined = ga.maybe_undefined || gb.maybe_undefined;
+    if (!(std::isfinite(g.lo) && std::isfinite(g.hi) && std::isfinite(h.lo) &&
+          std::isfinite(h.hi) && g.lo <= g.hi && h.lo <= h.hi)) {
+        const IntervalValue wa{w, false, false}, wb{{1.0 - w.hi, 1.0 - w.lo}, false, false};
+        return binary(Op::Add, term(wa, ga), term(wb, gb));
+    }
+    const double lo = std::min(h.lo + w.lo * (g.lo - h.lo), h.lo + w.hi * (g.lo - h.lo));
+    const double hi = std::max(h.hi + w.lo * (g.hi - h.hi), h.hi + w.hi * (g.hi - h.hi));
+    const double slack = interval_ranges::kLibmSlack * (std::max(std::fabs(g.lo), std::fabs(g.hi)) +
+                                                        std::max(std::fabs(h.lo), std::fabs(h.hi)));
+    return {{lo - slack, hi + slack}, discontinuous, undefined};
 }
 
 /// A value with its gradient.
@@ -166,12 +212,13 @@ template <class T>
         return;
     }
     out.value = binary(op, a.value, b.value);
-    if (op == Op::Min || op == Op::Max) {
+    if (is_choice(op)) {
         Pick p = pick(op, a.value, b.value);
         for (int k = 0; k < 3; ++k) {
-            out.grad[k] = p == Pick::A   ? a.grad[k]
-                          : p == Pick::B ? b.grad[k]
-                                         : either(a.grad[k], b.grad[k]);
+            out.grad[k] = p == Pick::A          ? a.grad[k]
+                          : p == Pick::B        ? b.grad[k]
+                          : op == Op::LogSumExp ? blend(a.value, b.value, a.grad[k], b.grad[k])
+                                                : either(a.grad[k], b.grad[k]);
         }
         return;
     }

@@ -407,6 +407,16 @@ struct IntervalStep {
         const Ends<D> b = lanes.template operand<b_in_register>(s.b, s.imm);
         const M fa = lanes.template operand_flags<a_in_register>(s.a);
         const M fb = lanes.template operand_flags<b_in_register>(s.b);
+        if constexpr (op == Op::LogSumExp) {
+            // No lane formula: the reference code lane by lane, choices included.
+            for (std::size_t l = 0; l < V; ++l) {
+                const IntervalValue x = lanes.template operand_value<a_in_register>(s.a, s.imm, l);
+                const IntervalValue y = lanes.template operand_value<b_in_register>(s.b, s.imm, l);
+                lanes.set_lane(s.out, l, interval_ranges::binary(op, x, y));
+                choice[l * choice_stride] = prove_choice(op, x, y);
+            }
+            return;
+        }
         lanes.store_value(s.out, binary_value<V, op>(a, fa, b, fb));
         if constexpr (op == Op::Min || op == Op::Max)
             record_choice<V, op>(a, fa, b, fb, choice, choice_stride);
@@ -480,13 +490,14 @@ struct GradientStep {
         return t;
     }
 
-    /// Recomputes the special lanes with forward_mode::step.
-    template <Op op, bool a_in_register, bool b_in_register>
+    /// Recomputes the special lanes with forward_mode::step (`counted`: as lane-steps left to the
+    /// reference, rather than an operation without lane formulas).
+    template <Op op, bool a_in_register, bool b_in_register, bool counted = true>
     ISOMESH_MEMBER void recompute(const M& special) {
         if (!any(special)) return;
         for (std::size_t l = 0; l < V; ++l) {
             if (!lane(special, l)) continue;
-            ++lanes.by_reference;
+            if constexpr (counted) ++lanes.by_reference;
             const auto a = operand_tangent<a_in_register>(s.a, l);
             const auto b = operand_tangent<b_in_register>(s.b, l);
             forward_mode::Tangent<IntervalValue> t;
@@ -501,7 +512,7 @@ struct GradientStep {
                     !std::isfinite(t.grad[k].value.lo) || !std::isfinite(t.grad[k].value.hi);
             }
             lanes.set_lane(s.out, l, t.value, gradient_not_finite);
-            if constexpr (op == Op::Min || op == Op::Max)
+            if constexpr (is_choice(op))
                 choice[l * choice_stride] = prove_choice(op, a.value, b.value);
         }
     }
@@ -569,6 +580,10 @@ struct GradientStep {
         using L = LaneTypes<V>;
         constexpr bool a_in_register = form != BatchForm::ImmediateA;
         constexpr bool b_in_register = form != BatchForm::ImmediateB;
+        if constexpr (op == Op::LogSumExp) {  // no lane formulas: forward_mode::step per lane
+            recompute<op, a_in_register, b_in_register, false>(L::splat_mask(-1));
+            return;
+        }
         const Ends<D> a = lanes.template operand<a_in_register>(s.a, s.imm);
         const Ends<D> b = lanes.template operand<b_in_register>(s.b, s.imm);
         const M fa = lanes.template operand_flags<a_in_register>(s.a);
@@ -660,7 +675,7 @@ ISOMESH_KERNEL std::size_t run(std::span<const BatchStep> steps, Register* regis
         } make{s, chunks, choice, choice_count};
         Chunked<kChunks, decltype(make)> visitor{make};
         dispatch_step(s, visitor);
-        if (s.op == Op::Min || s.op == Op::Max) ++choice;
+        if (is_choice(s.op)) ++choice;
     }
     std::size_t by_reference = 0;
     for (const auto& chunk : chunks) by_reference += chunk.by_reference;

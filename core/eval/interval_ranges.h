@@ -278,6 +278,28 @@ inline Interval atan2_range(const Interval& y, const Interval& x, Effects& e) {
     return widen(corners(Op::Atan2, y, x, e), Zero::Exact);
 }
 
+/// logsumexp: increasing in each operand, so its range is spanned by its values at the lower and
+/// at the upper ends. Widened by a slack absolute to the operands' scale: log_sum_exp's error is
+/// a few ulps of max(a, b) and of ln 2, not of its result (which may be near 0).
+inline Interval log_sum_exp_range(const Interval& a, const Interval& b) {
+    const double lo = log_sum_exp(a.lo, b.lo), hi = log_sum_exp(a.hi, b.hi);
+    double scale = 1.0;
+    for (double v : {lo, hi})
+        if (std::isfinite(v)) scale = std::max(scale, std::fabs(v));
+    return {lo - kLibmSlack * scale, hi + kLibmSlack * scale};
+}
+
+/// The weight of operand a in logsumexp's derivative, exp(a) / (exp(a) + exp(b)) = 1 / (1 +
+/// exp(b - a)), over a x b: increasing in a - b, so spanned by the ends of a - b; widened for
+/// libm's rounding, within [0, 1]. [0, 1] where a - b is undefined.
+inline Interval log_sum_exp_weight(const Interval& a, const Interval& b) {
+    if (a.is_empty() || b.is_empty()) return {0.0, 1.0};
+    const double d_lo = a.lo - b.hi, d_hi = a.hi - b.lo;
+    const double lo = d_lo == d_lo ? 1.0 / (1.0 + std::exp(-d_lo)) : 0.0;
+    const double hi = d_hi == d_hi ? 1.0 / (1.0 + std::exp(-d_hi)) : 1.0;
+    return clamp({lo - kLibmSlack, hi + kLibmSlack}, 0.0, 1.0);
+}
+
 [[gnu::always_inline]] inline Interval unary_range(Op op, const Interval& a, double imm,
                                                    Effects& e) {
     switch (op) {
@@ -344,6 +366,8 @@ inline Interval atan2_range(const Interval& y, const Interval& x, Effects& e) {
             return {std::min(a.lo, b.lo), std::min(a.hi, b.hi)};
         case Op::Max:
             return {std::max(a.lo, b.lo), std::max(a.hi, b.hi)};
+        case Op::LogSumExp:
+            return log_sum_exp_range(a, b);
         default:
             assert(!"not a binary operation");
             return Interval::entire();

@@ -29,6 +29,12 @@ ISOMESH_KERNEL D term_minus_one(const D& d) {
     return d == D{} ? D{} : -d;
 }
 
+/// std::fabs in every lane.
+template <class D>
+ISOMESH_KERNEL D abs_lanes(const D& x) {
+    return x < D{} ? -x : x;
+}
+
 /// pow_int(x, k) of op_math.h in every lane, for k >= 0: the same multiplications in order.
 template <class D>
 ISOMESH_KERNEL D pow_lanes(const D& x, unsigned k, const D& one) {
@@ -152,6 +158,18 @@ struct PointStep {
             // apply_binary: NaN as a + b when either operand is NaN, else a < b ? a : b.
             const D chosen = op == Op::Min ? (a < b ? a : b) : (a > b ? a : b);
             r = mask_of(a != a) | mask_of(b != b) ? a + b : chosen;
+        } else if constexpr (op == Op::LogSumExp) {
+            // forward_mode::step: an operand's gradient beyond the cutoff (pick), else the weights
+            // (forward_mode::blend) as partial derivatives.
+            r = each_lane<V, D>([&](std::size_t l) { return log_sum_exp(lane(a, l), lane(b, l)); });
+            double pa[V], pb[V];
+            for (std::size_t l = 0; l < V; ++l) {
+                const auto w = forward_mode::log_sum_exp_weights(lane(a, l), lane(b, l));
+                pa[l] = w.da;
+                pb[l] = w.db;
+            }
+            da = load<D>(pa);
+            db = load<D>(pb);
         } else {
             r = each_lane<V, D>(
                 [&](std::size_t l) { return apply_binary(op, lane(a, l), lane(b, l)); });
@@ -178,6 +196,10 @@ struct PointStep {
                 g = a < b ? ga : gb;  // forward_mode::pick at a point
             else if constexpr (op == Op::Max)
                 g = a > b ? ga : gb;
+            else if constexpr (op == Op::LogSumExp)  // one operand wins outright: pick it
+                g = mask_of(abs_lanes(a - b) > L::splat(kLogSumExpCutoff))
+                        ? (a > b ? ga : gb)
+                        : term(da, ga) + term(db, gb);
             else
                 g = term(da, ga) + term(db, gb);
             lanes.set_grad(s.out, k, g);

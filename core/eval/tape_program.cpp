@@ -84,8 +84,7 @@ TapeProgram make_program(std::vector<Instruction> code) {
     for (std::size_t i = 0; i < n; ++i) {
         const Instruction& ins = c[i];
         if (!live[i] || is_leaf(ins.op)) continue;
-        if (ins.op == Op::Min || ins.op == Op::Max)
-            program.choice_slots.push_back(static_cast<std::uint32_t>(i));
+        if (is_choice(ins.op)) program.choice_slots.push_back(static_cast<std::uint32_t>(i));
         BatchForm form = form_of(c, ins);
         if (form != BatchForm::ImmediateA) in_register[ins.a] = true, last_use[ins.a] = i;
         if (is_binary(ins.op) && form != BatchForm::ImmediateB)

@@ -23,8 +23,9 @@ struct TapeProgram {
     /// writes kOutputRegister.
     std::vector<BatchStep> steps;
     std::uint32_t scratch_registers = 0;
-    /// The live min and max instructions (indices into `code`), in order: interval evaluation
-    /// records a Choice for each (tape_simplify.h), which simplification on a box prunes by.
+    /// The live min, max and logsumexp instructions (indices into `code`), in order: interval
+    /// evaluation records a Choice for each (tape_simplify.h), which simplification on a box
+    /// prunes by.
     std::vector<std::uint32_t> choice_slots;
     /// True when every immediate operand of `steps` is finite: the interval kernels
     /// (interval_kernels.h) treat an immediate c as the interval [c, c], which a NaN or an

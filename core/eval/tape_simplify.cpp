@@ -15,12 +15,12 @@ std::optional<std::vector<Instruction>> simplify_on_box(std::span<const Instruct
         return std::nullopt;
     const std::size_t n = code.size();
     // forward[i]: the slot whose value slot i always equals on the box (itself, or the proven
-    // operand of a min or max, followed transitively: operands come before their uses).
+    // operand of a min, max or logsumexp, followed transitively: operands come before their uses).
     std::vector<std::uint32_t> forward(n);
     for (std::size_t i = 0; i < n; ++i) forward[i] = static_cast<std::uint32_t>(i);
     for (std::size_t c = 0; c < choices.size(); ++c) {
         const std::uint32_t i = choice_slots[c];
-        assert(code[i].op == Op::Min || code[i].op == Op::Max);
+        assert(is_choice(code[i].op));
         if (choices[c] != Choice::Both)
             forward[i] = forward[choices[c] == Choice::A ? code[i].a : code[i].b];
     }

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cmath>
+#include <numbers>
 
 #include "tape/tape.h"
 
@@ -57,6 +58,23 @@ inline double apply_unary(Op op, double a, double imm) {
     }
 }
 
+/// Where logsumexp(a, b) is max(a, b) exactly: |a - b| > kLogSumExpCutoff. The term dropped,
+/// ln(1 + exp(-|a - b|)) < exp(-40) = 4.2e-18, is below the rounding error of the spelled-out
+/// ln(exp(a) + exp(b)) (whose sum rounds away exp(-37) relative), and the cut lets interval
+/// evaluation prove one operand irrelevant on a box, as for min and max (eval/tape_simplify.h).
+inline constexpr double kLogSumExpCutoff = 40.0;
+
+/// ln(exp(a) + exp(b)) without overflow: max(a, b) + ln(1 + exp(-|a - b|)), the second term
+/// dropped beyond kLogSumExpCutoff. Symmetric in a and b bit for bit; NaN as a + b when either
+/// operand is NaN; equal infinities give themselves.
+inline double log_sum_exp(double a, double b) {
+    if (a != a || b != b) return a + b;
+    if (a == b) return a + std::numbers::ln2;
+    const double hi = a > b ? a : b;
+    const double d = hi - (a > b ? b : a);  // > 0, possibly +inf
+    return d > kLogSumExpCutoff ? hi : hi + std::log1p(std::exp(-d));
+}
+
 /// Value of binary `op` at (a, b). Min and max propagate NaN (unlike std::fmin): an undefined
 /// operand makes the result undefined, so no surface is invented where the function is undefined.
 inline double apply_binary(Op op, double a, double b) {
@@ -69,6 +87,7 @@ inline double apply_binary(Op op, double a, double b) {
         case Op::Atan2: return std::atan2(a, b);
         case Op::Min: return (a != a || b != b) ? a + b : (a < b ? a : b);
         case Op::Max: return (a != a || b != b) ? a + b : (a > b ? a : b);
+        case Op::LogSumExp: return log_sum_exp(a, b);
         default: return std::nan("");
     }
 }

@@ -31,6 +31,7 @@ constexpr std::array<OpInfo, kOpCount> kOpInfo = {{
     {"atan", 1, false},  {"sinh", 1, false},  {"cosh", 1, false},   {"tanh", 1, false},
     {"add", 2, true},    {"sub", 2, false},   {"mul", 2, true},     {"div", 2, false},
     {"pow", 2, false},   {"atan2", 2, false}, {"min", 2, true},     {"max", 2, true},
+    {"logsumexp", 2, true},
 }};
 
 const OpInfo& info(Op op) { return kOpInfo[static_cast<std::size_t>(op)]; }
@@ -125,7 +126,34 @@ std::uint32_t TapeBuilder::unary(Op op, std::uint32_t a) {
     const Instruction& operand = code_[a];
     if (operand.op == Op::Const) return constant(apply_unary(op, operand.imm, 0.0));
     if (op == Op::Neg && operand.op == Op::Neg) return operand.a;
+    if (op == Op::Ln) {
+        if (auto fused = log_of_exponential_sum(a)) return *fused;
+    }
     return emit({op, a, 0, 0.0});
+}
+
+std::optional<std::uint32_t> TapeBuilder::log_of_exponential_sum(std::uint32_t sum) {
+    if (code_[sum].op != Op::Add) return std::nullopt;
+    // The terms of the sum, left to right (an explicit stack: sums may nest deeply).
+    std::vector<std::uint32_t> exponents, pending{sum};
+    while (!pending.empty()) {
+        const Instruction term = code_[pending.back()];
+        pending.pop_back();
+        if (term.op == Op::Add) {
+            pending.push_back(term.b);
+            pending.push_back(term.a);
+        } else if (term.op == Op::Exp) {
+            exponents.push_back(term.a);
+        } else if (term.op == Op::Const && term.imm > 0.0 && std::isfinite(term.imm)) {
+            exponents.push_back(constant(std::log(term.imm)));
+        } else {
+            return std::nullopt;
+        }
+    }
+    std::uint32_t result = exponents[0];
+    for (std::size_t i = 1; i < exponents.size(); ++i)
+        result = binary(Op::LogSumExp, result, exponents[i]);
+    return result;
 }
 
 std::uint32_t TapeBuilder::pow_int(std::uint32_t a, int n) {

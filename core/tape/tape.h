@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <unordered_map>
@@ -58,15 +59,20 @@ enum class Op : std::uint8_t {
     Atan2,  // atan2(a, b) = angle of the point (b, a)
     Min,
     Max,
+    // ln(exp(a) + exp(b)), the smooth maximum (log-sum-exp) that smooth CSG blends are made of
+    // (-ln(exp(-k a) + exp(-k b)) / k is a smooth min). Not an opcode of the languages:
+    // TapeBuilder fuses the spelled-out form into it (see TapeBuilder::unary), so that every
+    // evaluator sees one operation whose enclosures are tight (eval/interval_ranges.h).
+    LogSumExp,
 };
 
-inline constexpr int kOpCount = static_cast<int>(Op::Max) + 1;
+inline constexpr int kOpCount = static_cast<int>(Op::LogSumExp) + 1;
 
 /// Number of operands of `op`: 0 for leaves, 1 for unary, 2 for binary operations.
 int op_arity(Op op);
 /// A stable lower-case name for `op` (as used in dumps and the .vm format where one exists).
 std::string_view op_name(Op op);
-/// True for operations whose operands may be swapped (add, mul, min, max).
+/// True for operations whose operands may be swapped (add, mul, min, max, logsumexp).
 bool op_commutes(Op op);
 
 struct Instruction {
@@ -98,6 +104,11 @@ struct Tape {
 /// evaluator uses); identical instructions are emitted once (hash-consing, which is common
 /// subexpression elimination); a few identities are applied where they are exact for every
 /// input, including infinities and NaN (x+0, x*1, x-0, x/1, --x, x^1, x^2 -> square(x)).
+/// One rewrite is not an identity of IEEE arithmetic but a more accurate form of the same
+/// function: ln(exp(a) + exp(b) + ...) (a sum of two or more exponentials, or of exponentials and
+/// positive constants c = exp(ln c)) becomes logsumexp(logsumexp(a, b), ...), which agrees with it
+/// within a few rounding errors where no exp overflows or underflows, and stays finite where one
+/// does.
 class TapeBuilder {
 public:
     std::uint32_t constant(double value);
@@ -131,6 +142,9 @@ private:
     };
 
     std::uint32_t emit(Instruction instruction);
+    /// logsumexp of the exponents when `sum` is a sum of two or more exponentials and positive
+    /// constants (ln(sum) then), else nothing.
+    std::optional<std::uint32_t> log_of_exponential_sum(std::uint32_t sum);
 
     std::vector<Instruction> code_;
     std::vector<std::string> params_;

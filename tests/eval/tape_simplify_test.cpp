@@ -94,6 +94,20 @@ TEST(TapeSimplify, proves_choices_from_enclosures) {
     EXPECT_EQ(prove_choice(Op::Min, {Interval::empty(), false, true}, high), Choice::Both);
 }
 
+// logsumexp returns an operand unchanged only beyond the cutoff: ahead by more than 40.
+TEST(TapeSimplify, proves_logsumexp_choices_beyond_the_cutoff) {
+    const IntervalValue low{{0, 1}, false, false}, near{{2, 30}, false, false};
+    const IntervalValue far{{41.5, 50}, false, false};
+    EXPECT_EQ(prove_choice(Op::LogSumExp, low, near), Choice::Both);
+    EXPECT_EQ(prove_choice(Op::LogSumExp, far, low), Choice::A);
+    EXPECT_EQ(prove_choice(Op::LogSumExp, low, far), Choice::B);
+    EXPECT_EQ(prove_choice(Op::LogSumExp, far, near), Choice::Both);  // 41.5 - 30 < 40
+    IntervalValue undefined_low = low;
+    undefined_low.maybe_undefined = true;
+    EXPECT_EQ(prove_choice(Op::LogSumExp, far, undefined_low), Choice::Both);
+    EXPECT_EQ(log_sum_exp(far.value.lo, low.value.hi), far.value.lo);  // the cutoff in values
+}
+
 // prospero (7,866 instructions, hundreds of min/max): tiles of a 1024^2-style grid need a small
 // part of the tape each, and evaluate to exactly the same values.
 TEST(TapeSimplify, prospero_tiles_run_much_shorter_tapes) {

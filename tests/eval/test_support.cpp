@@ -55,6 +55,14 @@ std::vector<TestFunction> test_functions() {
                      abs(x + 0.5) + abs(y) + abs(z) - 0.6));
     FUNCTION("rational", 2.0, P({}), (x * y - z) / (x * x + y * y + 0.5) + x * y * z);
     FUNCTION("undefined_min", 2.0, P({{0, 0, 0}}), minimum(sqrt(x), y) + maximum(log(z), x));
+    // Smooth CSG as CAD tools write it (bear.vm): a smooth union of three shapes,
+    // -ln(sum exp(-k d_i)) / k, which the tape holds as logsumexp; the third term is beyond the
+    // cutoff on most boxes. Plus a softplus, ln(1 + exp(3x)) (a constant term).
+    FUNCTION("smooth_blend", 2.0, P({}),
+             -log(exp(-6 * (sqrt(x * x + y * y + z * z) - 1)) +
+                  exp(-6 * (abs(x) + abs(y) + abs(z) - 1.2)) + exp(30 * (0.5 - z))) /
+                     6 +
+                 0.1 * log(1 + exp(3 * x)));
 #undef FUNCTION
 
     // A parameter: a*x^2 + b*y - z with a = 1.5, b = -2.

@@ -160,6 +160,26 @@ TEST(CompileExpression, functions_match_std_math) {
     for (const auto& [source, reference] : cases) expect_values(source, reference);
 }
 
+// ln of a sum of exponentials (smooth CSG blends) compiles to logsumexp, one per extra term, with
+// positive constants as exponentials of their logarithm: the same values, and finite where an
+// exponential overflows.
+TEST(CompileExpression, log_of_exponential_sums_fuses_to_logsumexp) {
+    EXPECT_EQ(count_ops(compiled("ln(exp(x) + exp(y))"), Op::LogSumExp), 1);
+    const Tape blend = compiled("-ln(exp(-8x) + exp(-8y) + exp(-8z))/8");
+    EXPECT_EQ(count_ops(blend, Op::LogSumExp), 2);
+    EXPECT_EQ(count_ops(blend, Op::Exp) + count_ops(blend, Op::Ln), 0);
+    EXPECT_EQ(count_ops(compiled("ln(1 + e^x)"), Op::LogSumExp), 1);
+    EXPECT_EQ(count_ops(compiled("ln(exp(x) + y)"), Op::LogSumExp), 0);
+    EXPECT_EQ(count_ops(compiled("ln(exp(x) - exp(y))"), Op::LogSumExp), 0);
+    EXPECT_EQ(count_ops(compiled("ln(exp(x))"), Op::LogSumExp), 0);
+    expect_values("-ln(exp(-8x) + exp(-8y) + exp(-8z))/8", [](double x, double y, double z) {
+        return -std::log(std::exp(-8 * x) + std::exp(-8 * y) + std::exp(-8 * z)) / 8;
+    });
+    expect_values("ln(2 + exp(3x))",
+                  [](double x, double, double) { return std::log(2 + std::exp(3 * x)); });
+    EXPECT_EQ(interpret(compiled("ln(exp(1000x) + exp(y))"), 1.0, 0.0, 0.0), 1000.0);
+}
+
 TEST(CompileExpression, e_power_is_exp) {
     Tape tape = compiled("e^(x y)");
     EXPECT_EQ(count_ops(tape, Op::Exp), 1);
