@@ -2,16 +2,39 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cerrno>
+
+#include <sys/resource.h>
 
 #include "server/resources.h"
 
 namespace isomesh::server {
 
-WorkerPool::WorkerPool(unsigned threads, Metrics* metrics, ErrorHandler on_error)
+namespace {
+
+/// Lowers the calling thread's scheduling priority by `levels` (on Linux, PRIO_PROCESS with id 0
+/// names the calling thread, not the whole process). Lowering needs no privilege; a failure
+/// leaves the priority as it was.
+void lower_priority(int levels) {
+    if (levels <= 0) return;
+    errno = 0;
+    const int now = getpriority(PRIO_PROCESS, 0);
+    if (errno != 0) return;
+    setpriority(PRIO_PROCESS, 0, std::min(now + levels, 19));
+}
+
+}  // namespace
+
+WorkerPool::WorkerPool(unsigned threads, Metrics* metrics, ErrorHandler on_error, int nice)
     : metrics_(metrics), on_error_(std::move(on_error)) {
     assert(threads >= 1);
     if (metrics_) metrics_->worker_threads.set(threads);
-    for (unsigned i = 0; i < threads; ++i) threads_.emplace_back([this] { work(); });
+    for (unsigned i = 0; i < threads; ++i) {
+        threads_.emplace_back([this, nice] {
+            lower_priority(nice);
+            work();
+        });
+    }
 }
 
 WorkerPool::~WorkerPool() {

@@ -58,8 +58,12 @@ class WorkerPool {
     using ErrorHandler = std::function<void(std::exception_ptr)>;
 
     /// Starts `threads` (>= 1) workers. `metrics` (optional) receives run_queue and busy_workers;
-    /// `on_error` is told of any exception escaping a turn (the task then counts as idle).
-    explicit WorkerPool(unsigned threads, Metrics* metrics = nullptr, ErrorHandler on_error = {});
+    /// `on_error` is told of any exception escaping a turn (the task then counts as idle). The
+    /// workers run `nice` levels below the thread that starts them (Linux's nice value, capped at
+    /// 19): the network threads, which accept connections, read requests and write frames in
+    /// moments, come first when the cores are full of refinement.
+    explicit WorkerPool(unsigned threads, Metrics* metrics = nullptr, ErrorHandler on_error = {},
+                        int nice = 0);
     ~WorkerPool();
     WorkerPool(const WorkerPool&) = delete;
     WorkerPool& operator=(const WorkerPool&) = delete;

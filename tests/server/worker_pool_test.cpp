@@ -5,12 +5,15 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <future>
 #include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <sys/resource.h>
 
 namespace isomesh::server {
 namespace {
@@ -196,6 +199,26 @@ TEST(WorkerPool, schedule_new_session_promotes_a_queued_task_but_not_an_urgent_o
     held.pool.schedule(u, Lane::new_session);  // stays urgent
     EXPECT_EQ(held.pool.queued(), 3u);
     EXPECT_EQ(held.release(), "Uar");
+}
+
+TEST(WorkerPool, workers_run_nice_levels_below_the_thread_that_starts_them) {
+    errno = 0;
+    const int own = getpriority(PRIO_PROCESS, 0);  // this thread's (Linux: per thread)
+    ASSERT_EQ(errno, 0);
+    std::atomic<int> seen{-100};
+    struct NiceTask : Task {
+        explicit NiceTask(std::atomic<int>& seen) : seen(seen) {}
+        bool run_slice() override {
+            seen = getpriority(PRIO_PROCESS, 0);
+            return false;
+        }
+        std::atomic<int>& seen;
+    };
+    WorkerPool pool(1, nullptr, {}, 3);
+    pool.schedule(std::make_shared<NiceTask>(seen));
+    ASSERT_TRUE(pool.wait_idle(Clock::now() + 10s));
+    EXPECT_EQ(seen.load(), std::min(own + 3, 19));
+    EXPECT_EQ(getpriority(PRIO_PROCESS, 0), own);  // the starting thread keeps its own
 }
 
 TEST(WorkerPool, stop_drops_queued_work_and_joins) {
