@@ -142,6 +142,11 @@ const std::vector<Option>& options() {
                       &ServerConfig::web_root),
         integer_option("threads", "refinement worker threads (0: one per core)",
                        &ServerConfig::worker_threads, 0, 256),
+        integer_option("worker-nice",
+                       "nice levels the refinement workers run below the network threads: with "
+                       "every core busy, accepting connections, reading requests and writing "
+                       "frames come first (0: the same priority)",
+                       &ServerConfig::worker_nice, 0, 19),
         integer_option("slice-us", "refinement time slice per turn of a session, microseconds",
                        &ServerConfig::slice_us, 100, 1'000'000),
         integer_option(

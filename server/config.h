@@ -28,7 +28,9 @@ struct ServerConfig {
     std::string web_root;
 
     // work
-    unsigned worker_threads = 0;    ///< 0: one per core
+    unsigned worker_threads = 0;  ///< 0: one per core
+    /// The workers' scheduling priority, this many nice levels below the network threads'.
+    unsigned worker_nice = 5;
     std::uint32_t slice_us = 2000;  ///< refinement time slice per turn of a session
     /// CPU time within which the first mesh of a session (or of a new box) is made.
     std::uint32_t first_mesh_ms = 10;

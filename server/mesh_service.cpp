@@ -121,16 +121,18 @@ MeshService::MeshService(const ServerConfig& config, Logger& logger, Metrics& me
       version_limits_(version_limits(config)),
       parse_limits_(parse_limits(config)),
       first_meshes_(config.first_mesh_cache, config.first_mesh_cache_mb << 20),
-      pool_(resolved_worker_threads(config), &metrics,
-            [&logger](std::exception_ptr error) {
-                try {
-                    std::rethrow_exception(error);
-                } catch (const std::exception& e) {
-                    logger.error("worker_exception", {{"message", e.what()}});
-                } catch (...) {
-                    logger.error("worker_exception", {{"message", "unknown"}});
-                }
-            }),
+      pool_(
+          resolved_worker_threads(config), &metrics,
+          [&logger](std::exception_ptr error) {
+              try {
+                  std::rethrow_exception(error);
+              } catch (const std::exception& e) {
+                  logger.error("worker_exception", {{"message", e.what()}});
+              } catch (...) {
+                  logger.error("worker_exception", {{"message", "unknown"}});
+              }
+          },
+          static_cast<int>(config.worker_nice)),
       persistence_(std::move(store), metrics, logger),
       max_memory_bytes_(resolved_max_memory_bytes(config)),
       housekeeper_([this] { housekeeping(); }) {

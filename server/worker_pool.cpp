@@ -2,14 +2,39 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cerrno>
+
+#include <sys/resource.h>
+
+#include "server/resources.h"
 
 namespace isomesh::server {
 
-WorkerPool::WorkerPool(unsigned threads, Metrics* metrics, ErrorHandler on_error)
+namespace {
+
+/// Lowers the calling thread's scheduling priority by `levels` (on Linux, PRIO_PROCESS with id 0
+/// names the calling thread, not the whole process). Lowering needs no privilege; a failure
+/// leaves the priority as it was.
+void lower_priority(int levels) {
+    if (levels <= 0) return;
+    errno = 0;
+    const int now = getpriority(PRIO_PROCESS, 0);
+    if (errno != 0) return;
+    setpriority(PRIO_PROCESS, 0, std::min(now + levels, 19));
+}
+
+}  // namespace
+
+WorkerPool::WorkerPool(unsigned threads, Metrics* metrics, ErrorHandler on_error, int nice)
     : metrics_(metrics), on_error_(std::move(on_error)) {
     assert(threads >= 1);
     if (metrics_) metrics_->worker_threads.set(threads);
-    for (unsigned i = 0; i < threads; ++i) threads_.emplace_back([this] { work(); });
+    for (unsigned i = 0; i < threads; ++i) {
+        threads_.emplace_back([this, nice] {
+            lower_priority(nice);
+            work();
+        });
+    }
 }
 
 WorkerPool::~WorkerPool() {
@@ -88,19 +113,21 @@ void WorkerPool::promote(const std::shared_ptr<Task>& task, Lane lane) {
     queue_of(lane).push_back(task);
 }
 
-std::shared_ptr<Task> WorkerPool::next_task() {
-    auto* lane = &queue_;
+std::shared_ptr<Task> WorkerPool::next_task(Lane& lane) {
+    const std::size_t urgent = static_cast<std::size_t>(Lane::urgent);
+    const std::size_t fresh = static_cast<std::size_t>(Lane::new_session);
     if (!urgent_.empty() && !new_sessions_.empty()) {
-        // Both wait on a user: they take turns.
-        lane = new_session_next_ ? &new_sessions_ : &urgent_;
-        new_session_next_ = !new_session_next_;
-    } else if (!urgent_.empty()) {
-        lane = &urgent_;
-    } else if (!new_sessions_.empty()) {
-        lane = &new_sessions_;
+        // Both wait on a user: they share the time (worker_pool.h).
+        lane = lane_time_[fresh] < lane_time_[urgent] ? Lane::new_session : Lane::urgent;
+    } else {
+        lane_time_ = {};
+        lane = !urgent_.empty()         ? Lane::urgent
+               : !new_sessions_.empty() ? Lane::new_session
+                                        : Lane::round_robin;
     }
-    std::shared_ptr<Task> task = std::move(lane->front());
-    lane->pop_front();
+    auto& queue = queue_of(lane);
+    std::shared_ptr<Task> task = std::move(queue.front());
+    queue.pop_front();
     return task;
 }
 
@@ -135,6 +162,7 @@ std::size_t WorkerPool::queued() const {
 void WorkerPool::work() {
     for (;;) {
         std::shared_ptr<Task> task;
+        Lane lane = Lane::round_robin;
         {
             std::unique_lock lock(mutex_);
             for (;;) {
@@ -147,23 +175,26 @@ void WorkerPool::work() {
                 }
             }
             if (stopping_) return;
-            task = next_task();
+            task = next_task(lane);
             task->state_ = Task::State::running;
             ++running_;
             if (metrics_) metrics_->run_queue.add(-1), metrics_->busy_workers.add(1);
         }
         bool wants_more = false;
+        const Clock::duration cpu_start = thread_cpu_time();
         try {
             wants_more = task->run_slice();
         } catch (...) {
             if (on_error_) on_error_(std::current_exception());
         }
-        finish_turn(task, wants_more);
+        finish_turn(task, wants_more, lane, thread_cpu_time() - cpu_start);
     }
 }
 
-void WorkerPool::finish_turn(const std::shared_ptr<Task>& task, bool wants_more) {
+void WorkerPool::finish_turn(const std::shared_ptr<Task>& task, bool wants_more, Lane lane,
+                             Clock::duration cpu) {
     std::lock_guard lock(mutex_);
+    if (lane != Lane::round_robin) lane_time_[static_cast<std::size_t>(lane)] += cpu;
     if (metrics_) metrics_->busy_workers.add(-1);
     --running_;
     const bool rescheduled = task->state_ == Task::State::running_rescheduled;

@@ -76,6 +76,8 @@ ordered_json report_json(const LoadReport& report) {
         by_entry[name] = percentiles_json(samples);
     }
     out["time_to_first_mesh_by_entry_ms"] = by_entry;
+    out["create_to_created_ms"] = percentiles_json(s.created_ms);
+    out["first_mesh_delivery_ms"] = percentiles_json(s.first_mesh_delivery_ms);
     out["frame_latency_ms"] = percentiles_json(s.frame_latency_ms);
     out["update_latency_ms"] = percentiles_json(s.update_latency_ms);
     out["frames"] = {{"decoded", s.frames}, {"keyframes", s.keyframes}, {"deltas", s.deltas}};
@@ -113,6 +115,8 @@ std::string report_table(const LoadReport& report) {
     for (const auto& [name, samples] : s.first_mesh_ms_by_entry) {
         out += percentiles_line(("  " + name).c_str(), samples);
     }
+    out += percentiles_line("  create to created", s.created_ms);
+    out += percentiles_line("  first mesh delivery", s.first_mesh_delivery_ms);
     out += percentiles_line("frame latency", s.frame_latency_ms);
     out += percentiles_line("update to frame", s.update_latency_ms);
     out += format("%-28s %9llu (%llu keyframes, %llu deltas)\n", "frames decoded",

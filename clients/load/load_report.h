@@ -11,7 +11,8 @@ namespace isomesh::load {
 
 /// Keys: url, sessions, duration_s, elapsed_s, threads, updates_per_s, hold_s, mix (names),
 /// time_to_first_mesh_ms / frame_latency_ms / update_latency_ms ({count, p50, p90, p99, max}),
-/// time_to_first_mesh_by_entry_ms {entry name: the same},
+/// time_to_first_mesh_by_entry_ms {entry name: the same}, create_to_created_ms and
+/// first_mesh_delivery_ms (parts of the time to first mesh, load_stats.h; the same form),
 /// frames {decoded, keyframes, deltas}, triangles_received, triangles_per_s, bytes_received,
 /// bytes_per_s, sessions_created, converged, updates_sent, resyncs,
 /// errors {total, server {code: count}, decode, connection, examples},

@@ -44,6 +44,8 @@ std::uint64_t LoadStats::error_count() const {
 
 void LoadStats::merge(const LoadStats& other) {
     append(first_mesh_ms, other.first_mesh_ms);
+    append(created_ms, other.created_ms);
+    append(first_mesh_delivery_ms, other.first_mesh_delivery_ms);
     for (const auto& [name, samples] : other.first_mesh_ms_by_entry) {
         append(first_mesh_ms_by_entry[name], samples);
     }

@@ -28,6 +28,12 @@ struct LoadStats {
     /// The same samples by mix entry name: a heavy surface's phase 1 alone may take longer than
     /// a light one under load.
     std::map<std::string, std::vector<double>> first_mesh_ms_by_entry;
+    /// Where the time to first mesh goes: from sending `create` to its `created` reply (the
+    /// server reading, parsing and compiling the request), and from the first keyframe's server
+    /// timestamp (when it was made or, cached, sent) to its arrival (the server's write queue, the
+    /// network, this generator's own reading).
+    std::vector<double> created_ms;
+    std::vector<double> first_mesh_delivery_ms;
     /// Frame arrival (decoded) minus the frame's server timestamp, same machine, same clock.
     std::vector<double> frame_latency_ms;
     /// From sending an `update` to the first frame of that function version or a later one.

@@ -92,6 +92,7 @@ void VirtualUser::on_text(const std::string& text) {
                 if (message.id == protocol::RequestId{create_id_}) {
                     session_ = message.session;
                     ++stats_.sessions_created;
+                    stats_.created_ms.push_back(ms_since(create_sent_));
                 }
             } else if constexpr (std::is_same_v<T, protocol::Updated>) {
                 const auto* id = message.id ? std::get_if<std::int64_t>(&*message.id) : nullptr;
@@ -142,7 +143,10 @@ void VirtualUser::on_frame(const net::WsMessage& message) {
         ++stats_.resyncs;
         send(protocol::Resync{std::nullopt, header.session});
     }
-    if (!have_first_mesh_ && header.kind == protocol::FrameKind::keyframe) on_first_mesh();
+    if (!have_first_mesh_ && header.kind == protocol::FrameKind::keyframe) {
+        stats_.first_mesh_delivery_ms.push_back(stats_.frame_latency_ms.back());
+        on_first_mesh();
+    }
     // Every update answered by now has its first frame: this one or an earlier one.
     while (!versions_awaited_.empty() &&
            versions_awaited_.begin()->first <= header.function_version) {

@@ -180,6 +180,12 @@ TEST_F(LoadRun, three_sessions_decode_frames_without_errors) {
         EXPECT_GT(r["frames"]["decoded"].get<int>(), 3);
         EXPECT_GE(r["time_to_first_mesh_ms"]["count"].get<int>(), 3);
         EXPECT_GT(r["time_to_first_mesh_ms"]["p50"].get<double>(), 0.0);
+        // Its parts: every session's `created`, and its first keyframe's delivery.
+        EXPECT_GE(r["create_to_created_ms"]["count"].get<int>(),
+                  r["time_to_first_mesh_ms"]["count"].get<int>());
+        EXPECT_EQ(r["first_mesh_delivery_ms"]["count"], r["time_to_first_mesh_ms"]["count"]);
+        EXPECT_LE(r["create_to_created_ms"]["p50"].get<double>(),
+                  r["time_to_first_mesh_ms"]["max"].get<double>());
         EXPECT_EQ(r["frame_latency_ms"]["count"], r["frames"]["decoded"]);
         EXPECT_GT(r["triangles_per_s"].get<double>(), 0.0);
         EXPECT_GT(r["updates_sent"].get<int>(), 0);  // session 2 of the mix has a slider

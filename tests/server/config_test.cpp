@@ -99,6 +99,9 @@ TEST(ParseConfig, budgets_and_access_options) {
     EXPECT_EQ(c.allow_origin, "https://app.example, http://localhost:5173");
     EXPECT_EQ(parsed({"--first-mesh-cache", "0"}).first_mesh_cache, 0u);  // none kept
     EXPECT_EQ(parsed({"--first-mesh-cache-mb", "8"}).first_mesh_cache_mb, 8u);
+    EXPECT_EQ(parsed({}).worker_nice, 5u);  // the network threads come first
+    EXPECT_EQ(parsed({"--worker-nice", "0"}).worker_nice, 0u);
+    EXPECT_NE(error_of({"--worker-nice", "20"}).find("--worker-nice"), std::string::npos);
     EXPECT_GT(resolved_max_memory_bytes(parsed({})), 0u);  // 0: half the physical memory
     EXPECT_NE(error_of({"--allow-origin", "app.example"}).find("--allow-origin"),
               std::string::npos);

@@ -1,8 +1,11 @@
 #include "server/worker_pool.h"
 
+#include "server/resources.h"
+
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <future>
 #include <mutex>
@@ -10,12 +13,15 @@
 #include <thread>
 #include <vector>
 
+#include <sys/resource.h>
+
 namespace isomesh::server {
 namespace {
 
 using namespace std::chrono_literals;
 
-/// A task that wants `turns` turns, each spending `turn_time`, and records when it ran.
+/// A task that wants `turns` turns, each spending `turn_time` of its thread's CPU time (what the
+/// pool shares), and records when it ran.
 class CountingTask : public Task {
   public:
     CountingTask(int turns, Clock::duration turn_time, std::vector<char>* log, char name,
@@ -25,8 +31,8 @@ class CountingTask : public Task {
     bool run_slice() override {
         const int concurrent = running_.fetch_add(1) + 1;
         max_concurrent = std::max(max_concurrent.load(), concurrent);
-        const auto end = Clock::now() + turn_time_;
-        while (Clock::now() < end) {
+        const auto end = thread_cpu_time() + turn_time_;
+        while (thread_cpu_time() < end) {
         }
         if (log_) {
             std::lock_guard lock(*log_mutex_);
@@ -114,8 +120,9 @@ class HeldPool {
         pool.schedule(blocker_);
         blocker_->started.get_future().wait();
     }
-    std::shared_ptr<CountingTask> task(int turns, char name) {
-        return std::make_shared<CountingTask>(turns, 0ms, &log_, name, &log_mutex_);
+    /// A task of `turns` turns, each spending `turn_time` of CPU time.
+    std::shared_ptr<CountingTask> task(int turns, char name, Clock::duration turn_time = 0ms) {
+        return std::make_shared<CountingTask>(turns, turn_time, &log_, name, &log_mutex_);
     }
     /// Lets the queued tasks run; returns the names of their turns in order.
     std::string release() {
@@ -160,16 +167,25 @@ TEST(WorkerPool, schedule_urgent_promotes_a_queued_task) {
     EXPECT_EQ(held.release(), "ba");
 }
 
-TEST(WorkerPool, schedule_new_sessions_take_turns_with_urgent_work) {
+TEST(WorkerPool, schedule_new_sessions_share_the_time_with_urgent_work) {
     HeldPool held;
     held.pool.schedule(held.task(1, 'r'));
     for (char name : {'a', 'b', 'c', 'd'})
         held.pool.schedule(held.task(1, name), Lane::new_session);
-    held.pool.schedule(held.task(1, 'U'), Lane::urgent);
-    held.pool.schedule(held.task(1, 'V'), Lane::urgent);
-    // A burst of new sessions does not hold up the running sessions' urgent turns, nor they the
-    // first meshes; round-robin turns come after both.
-    EXPECT_EQ(held.release(), "UaVbcdr");
+    // Urgent turns of 20 ms of CPU time each; the new sessions' take next to none.
+    for (char name : {'U', 'V', 'W'}) held.pool.schedule(held.task(1, name, 20ms), Lane::urgent);
+    // Neither lane holds the other up: after an urgent turn, the new sessions have the time it
+    // took, enough for all four here; round-robin turns come after both.
+    EXPECT_EQ(held.release(), "UabcdVWr");
+}
+
+TEST(WorkerPool, schedule_urgent_work_shares_the_time_with_long_new_sessions) {
+    HeldPool held;
+    for (char name : {'a', 'b', 'c'})
+        held.pool.schedule(held.task(1, name, 20ms), Lane::new_session);
+    for (char name : {'U', 'V', 'W', 'X'}) held.pool.schedule(held.task(1, name), Lane::urgent);
+    // The other way round: a new session's long first step leaves the time for the urgent turns.
+    EXPECT_EQ(held.release(), "UaVWXbc");
 }
 
 TEST(WorkerPool, schedule_new_session_promotes_a_queued_task_but_not_an_urgent_one) {
@@ -183,6 +199,26 @@ TEST(WorkerPool, schedule_new_session_promotes_a_queued_task_but_not_an_urgent_o
     held.pool.schedule(u, Lane::new_session);  // stays urgent
     EXPECT_EQ(held.pool.queued(), 3u);
     EXPECT_EQ(held.release(), "Uar");
+}
+
+TEST(WorkerPool, workers_run_nice_levels_below_the_thread_that_starts_them) {
+    errno = 0;
+    const int own = getpriority(PRIO_PROCESS, 0);  // this thread's (Linux: per thread)
+    ASSERT_EQ(errno, 0);
+    std::atomic<int> seen{-100};
+    struct NiceTask : Task {
+        explicit NiceTask(std::atomic<int>& seen) : seen(seen) {}
+        bool run_slice() override {
+            seen = getpriority(PRIO_PROCESS, 0);
+            return false;
+        }
+        std::atomic<int>& seen;
+    };
+    WorkerPool pool(1, nullptr, {}, 3);
+    pool.schedule(std::make_shared<NiceTask>(seen));
+    ASSERT_TRUE(pool.wait_idle(Clock::now() + 10s));
+    EXPECT_EQ(seen.load(), std::min(own + 3, 19));
+    EXPECT_EQ(getpriority(PRIO_PROCESS, 0), own);  // the starting thread keeps its own
 }
 
 TEST(WorkerPool, stop_drops_queued_work_and_joins) {
