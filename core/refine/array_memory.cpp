@@ -1,5 +1,6 @@
-#include "refine/huge_pages.h"
+#include "refine/array_memory.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <deque>
 #include <mutex>
@@ -14,6 +15,8 @@
 
 namespace isomesh {
 namespace {
+
+constexpr std::size_t kPageBytes = 4096;
 
 struct Block {
     void* address = nullptr;
@@ -38,16 +41,20 @@ void unpoison(const Block& block) {
 #endif
 }
 
-/// The blocks handed out (their sizes, which free_huge_pages is not told) and the blocks kept
+/// The blocks handed out (their sizes, which free_array_block is not told) and the blocks kept
 /// for recycling, oldest first. Large arrays are allocated a few dozen times per refinement, so
 /// one lock for the process costs nothing measurable.
 class BlockRecycler {
   public:
     void* allocate(std::size_t bytes) {
+        bytes = rounded(bytes);
         std::lock_guard lock(mutex_);
         in_use_.reserve(in_use_.size() + 1);  // may throw: before a block is taken
         Block block = take_kept(bytes);
-        if (!block.address) block = fresh(bytes);
+        if (block.address)
+            ++state_.reused_blocks;
+        else
+            block = fresh(bytes);
         if (block.address) in_use_.emplace(block.address, block.bytes);
         return block.address;
     }
@@ -57,11 +64,11 @@ class BlockRecycler {
         const auto it = in_use_.find(address);
         const Block block{address, it->second};
         in_use_.erase(it);
-        if (block.bytes > limit_) {
+        if (block.bytes > state_.limit) {
             std::free(address);
             return;
         }
-        trim_to(limit_ - block.bytes);
+        trim_to(state_.limit - block.bytes);
         try {
             kept_.push_back(block);
         } catch (...) {
@@ -69,21 +76,24 @@ class BlockRecycler {
             return;
         }
         poison(block);
-        kept_bytes_ += block.bytes;
+        state_.kept_bytes += block.bytes;
     }
 
-    std::size_t kept_bytes() {
+    bool kept(std::size_t bytes) {
+        bytes = rounded(bytes);
         std::lock_guard lock(mutex_);
-        return kept_bytes_;
+        return std::any_of(kept_.begin(), kept_.end(),
+                           [&](const Block& b) { return fits(b, bytes); });
     }
-    std::size_t limit() {
+
+    RecycledMemory state() {
         std::lock_guard lock(mutex_);
-        return limit_;
+        return state_;
     }
     void set_limit(std::size_t bytes) {
         std::lock_guard lock(mutex_);
-        limit_ = bytes;
-        trim_to(limit_);
+        state_.limit = bytes;
+        trim_to(state_.limit);
     }
     void release() {
         std::lock_guard lock(mutex_);
@@ -96,33 +106,43 @@ class BlockRecycler {
     Block take_kept(std::size_t bytes) {
         auto best = kept_.end();
         for (auto it = kept_.begin(); it != kept_.end(); ++it) {
-            if (it->bytes >= bytes && it->bytes / 2 <= bytes &&
-                (best == kept_.end() || it->bytes < best->bytes))
-                best = it;
+            if (fits(*it, bytes) && (best == kept_.end() || it->bytes < best->bytes)) best = it;
         }
         if (best == kept_.end()) return {};
         const Block block = *best;
         kept_.erase(best);
-        kept_bytes_ -= block.bytes;
+        state_.kept_bytes -= block.bytes;
         unpoison(block);
         return block;
     }
 
-    static Block fresh(std::size_t bytes) {
-        void* address = std::aligned_alloc(kHugePageBytes, bytes);
+    static bool fits(const Block& block, std::size_t bytes) {
+        return block.bytes >= bytes && block.bytes / 2 <= bytes;
+    }
+
+    static std::size_t rounded(std::size_t bytes) {
+        const std::size_t grain =
+            bytes < kHugePageArrayBytes ? kRecycledBlockGrain : kHugePageBytes;
+        return (bytes + grain - 1) / grain * grain;
+    }
+
+    Block fresh(std::size_t bytes) {
+        const bool huge = bytes >= kHugePageArrayBytes;
+        void* address = std::aligned_alloc(huge ? kHugePageBytes : kPageBytes, bytes);
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
         // Advice only: without transparent huge pages the memory is the same, in 4 kB pages.
-        if (address) (void)madvise(address, bytes, MADV_HUGEPAGE);
+        if (address && huge) (void)madvise(address, bytes, MADV_HUGEPAGE);
 #endif
+        if (address) ++state_.fresh_blocks;
         return {address, bytes};
     }
 
     /// Frees the oldest kept blocks until at most `bytes` are kept.
     void trim_to(std::size_t bytes) noexcept {
-        while (kept_bytes_ > bytes) {
+        while (state_.kept_bytes > bytes) {
             unpoison(kept_.front());
             std::free(kept_.front().address);
-            kept_bytes_ -= kept_.front().bytes;
+            state_.kept_bytes -= kept_.front().bytes;
             kept_.pop_front();
         }
     }
@@ -130,8 +150,7 @@ class BlockRecycler {
     std::mutex mutex_;
     std::unordered_map<void*, std::size_t> in_use_;
     std::deque<Block> kept_;
-    std::size_t kept_bytes_ = 0;
-    std::size_t limit_ = kDefaultRecycledMemoryBytes;
+    RecycledMemory state_{.limit = kDefaultRecycledMemoryBytes};
 };
 
 BlockRecycler& recycler() {
@@ -142,20 +161,20 @@ BlockRecycler& recycler() {
 
 }  // namespace
 
-void* allocate_huge_pages(std::size_t bytes) {
+void* allocate_array_block(std::size_t bytes) {
     return recycler().allocate(bytes);
 }
 
-void free_huge_pages(void* block) noexcept {
+void free_array_block(void* block) noexcept {
     recycler().free(block);
 }
 
-std::size_t recycled_memory_bytes() {
-    return recycler().kept_bytes();
+bool recycled_block_kept(std::size_t bytes) {
+    return recycler().kept(bytes);
 }
 
-std::size_t recycled_memory_limit() {
-    return recycler().limit();
+RecycledMemory recycled_memory() {
+    return recycler().state();
 }
 
 void set_recycled_memory_limit(std::size_t bytes) {
