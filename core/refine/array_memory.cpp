@@ -101,8 +101,9 @@ class BlockRecycler {
     }
 
   private:
-    /// The smallest kept block of `bytes` to 2 `bytes` (a larger one would hold memory the next
-    /// refiner's larger arrays could use), removed from the kept ones; none when there is none.
+    /// The smallest kept block of `bytes` to 5/4 `bytes`, removed from the kept ones; none when
+    /// there is none. A larger block would hold resident memory (the pages its last array
+    /// touched) that the array does not need, beyond what a session's memory estimate allows.
     Block take_kept(std::size_t bytes) {
         auto best = kept_.end();
         for (auto it = kept_.begin(); it != kept_.end(); ++it) {
@@ -117,7 +118,7 @@ class BlockRecycler {
     }
 
     static bool fits(const Block& block, std::size_t bytes) {
-        return block.bytes >= bytes && block.bytes / 2 <= bytes;
+        return block.bytes >= bytes && block.bytes <= bytes + bytes / 4;
     }
 
     static std::size_t rounded(std::size_t bytes) {

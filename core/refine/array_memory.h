@@ -10,11 +10,10 @@
 // "always"): one fault maps 2 MB.
 //
 // Fresh pages, huge or not, are still zeroed by the kernel when first touched: 12-15% of a
-// refinement from scratch (bench_refine), and with 1,000 new sessions in isomesh-server over half
-// of its CPU time. So the blocks of freed arrays from 128 kB on (where glibc's heap gives pages
-// back to the kernel: it maps blocks from 256 kB on their own, and trims its top beyond 128 kB)
-// are kept, up to recycled_memory().limit bytes process-wide, and handed to the next arrays
-// that fit in them: a refiner that ends gives its memory, already mapped, to the next one.
+// refinement from scratch (bench_refine). So the blocks of freed arrays from 256 kB on (where
+// glibc's heap, as isomesh-server sets it up, maps each block anew; it recycles smaller ones
+// itself) are kept, up to recycled_memory().limit bytes process-wide, and handed to the next
+// arrays that fit in them: a refiner that ends gives its memory, already mapped, to the next one.
 // Smaller arrays use std::allocator. The contents are the same either way: only where memory
 // comes from differs. The blocks kept are resident memory (the server's resident-memory check
 // counts them); release_recycled_memory() gives them back to the system.
@@ -29,7 +28,7 @@ namespace isomesh {
 
 inline constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
 /// Arrays from this size on are recycled, their blocks rounded up to kRecycledBlockGrain.
-inline constexpr std::size_t kRecycledArrayBytes = std::size_t{128} << 10;
+inline constexpr std::size_t kRecycledArrayBytes = std::size_t{256} << 10;
 inline constexpr std::size_t kRecycledBlockGrain = std::size_t{64} << 10;
 /// Arrays from this size on are on huge pages, their blocks rounded up to whole huge pages (at
 /// most twice their size).
@@ -39,14 +38,15 @@ inline constexpr std::size_t kHugePageArrayBytes = kHugePageBytes / 2;
 inline constexpr std::size_t kDefaultRecycledMemoryBytes = std::size_t{64} << 20;
 
 /// A block for an array of `bytes` (at least kRecycledArrayBytes): the smallest kept block of
-/// its rounded size to twice that, else a fresh one (on huge pages from kHugePageArrayBytes on).
+/// its rounded size to 5/4 of that, else a fresh one (on huge pages from kHugePageArrayBytes on).
 /// nullptr on failure.
 void* allocate_array_block(std::size_t bytes);
 /// Gives back a block from allocate_array_block: kept for recycling while the blocks kept stay
 /// within the limit (the oldest ones are freed first to make room), else freed.
 void free_array_block(void* block) noexcept;
 
-/// A kept block of `bytes` to twice that is there now (another thread may take it first).
+/// A kept block allocate_array_block(bytes) would take is there now (another thread may take it
+/// first).
 bool recycled_block_kept(std::size_t bytes);
 
 /// The recycler's state (process-wide).
@@ -92,16 +92,16 @@ class RecycledAllocator {
     }
 };
 
-/// A vector whose storage, once 128 kB or more, is recycled, and on huge pages from 1 MB on.
+/// A vector whose storage, once 256 kB or more, is recycled, and on huge pages from 1 MB on.
 template <typename T>
 using RecycledVector = std::vector<T, RecycledAllocator<T>>;
 
-/// Room to reserve in an array: for `wanted` elements where that takes no fresh memory (a kept
-/// block holds them, or they take less than kRecycledArrayBytes), else for `fallback` (growing by
-/// doubling from there). Reserving room for a whole triangle budget at once saves copying as
-/// the arrays grow, but fresh pages for all of it are zeroed when first touched, in 2 MB
-/// steps: a waste for a session that stays small (a few hundred roots under a budget of 20,000),
-/// and with 1,000 new sessions isomesh-server spent 54% of its CPU time zeroing them.
+/// Room to reserve in an array: for `wanted` elements where a kept block holds them, else for
+/// `fallback` (growing by doubling from there). Reserving room for a whole triangle budget at
+/// once saves copying as the arrays grow, but fresh pages for all of it are zeroed when first
+/// touched, in 2 MB steps: a waste for a session that stays small (a few hundred roots under a
+/// budget of 20,000; with 1,000 new sessions isomesh-server spent 54% of its CPU time zeroing
+/// them), and heap memory taken for the budget is resident memory the session may never use.
 struct Reservation {
     Reservation(std::size_t n) : wanted(n), fallback(n) {}
     Reservation(std::size_t wanted_, std::size_t fallback_)
@@ -113,9 +113,8 @@ struct Reservation {
 template <typename T>
 void reserve(RecycledVector<T>& array, Reservation room) {
     const std::size_t bytes = room.wanted * sizeof(T);
-    const bool no_fresh_memory = room.wanted <= array.capacity() || bytes < kRecycledArrayBytes ||
-                                 recycled_block_kept(bytes);
-    array.reserve(no_fresh_memory ? room.wanted : room.fallback);
+    const bool recycled = bytes >= kRecycledArrayBytes && recycled_block_kept(bytes);
+    array.reserve(recycled ? room.wanted : room.fallback);
 }
 
 }  // namespace isomesh
