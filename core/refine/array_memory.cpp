@@ -128,7 +128,7 @@ class BlockRecycler {
     }
 
     Block fresh(std::size_t bytes) {
-        const bool huge = bytes >= kHugePageArrayBytes;
+        const bool huge = bytes >= kHugePageBytes;  // rounded: whole huge pages
         void* address = std::aligned_alloc(huge ? kHugePageBytes : kPageBytes, bytes);
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
         // Advice only: without transparent huge pages the memory is the same, in 4 kB pages.

@@ -44,6 +44,10 @@ TEST_F(ArrayMemory, small_arrays_are_recycled_in_4_kB_pages) {
     // Below kRecycledArrayBytes arrays come from std::allocator.
     data_of(kRecycledArrayBytes - 1);
     EXPECT_EQ(recycled_memory().kept_bytes, std::size_t{320} << 10);
+    // Just below kHugePageArrayBytes: 1 MB in 64 kB steps, in 4 kB pages (a huge-page block's
+    // alignment, 2 MB, would not divide its size).
+    data_of(kHugePageArrayBytes - 1);
+    EXPECT_EQ(recycled_memory().kept_bytes, (std::size_t{320} << 10) + kHugePageArrayBytes);
 }
 
 TEST_F(ArrayMemory, a_block_over_a_quarter_larger_than_the_array_is_not_used) {
@@ -97,6 +101,18 @@ TEST_F(ArrayMemory, reservation_takes_the_whole_room_only_from_kept_blocks) {
     reserve(small, Reservation(1000, 10));  // 8 kB, from std::allocator: not held for later
     EXPECT_EQ(small.capacity(), 10u);
 }
+
+#if defined(__SANITIZE_ADDRESS__)
+TEST_F(ArrayMemory, a_kept_block_is_poisoned_under_address_sanitizer) {
+    char* stale = nullptr;
+    {
+        RecycledVector<char> array(2 * kMiB);
+        stale = array.data();
+    }
+    EXPECT_GT(recycled_memory().kept_bytes, 0u);
+    EXPECT_DEATH(static_cast<volatile char*>(stale)[0] = 1, "use-after-poison");
+}
+#endif
 
 // A refinement whose arrays (about 10 MB) come fresh, recycled, and recycled while another runs
 // beside it: the same deltas and the same mesh.
