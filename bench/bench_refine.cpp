@@ -2,12 +2,14 @@
 // - refine/<surface>/<measure>: splits per second (counter splits_per_s, per second of the thread's
 //   CPU time), projection, error and the delta included, from the phase-1 mesh to 40,000
 //   triangles. Ratio printed: epsilon4 against the default "distance".
+// - refine_fresh/<surface>/distance: the same with no recycled memory (refine/array_memory.h), as
+//   a server's first sessions, or many new ones at once: every array on fresh pages, zeroed by
+//   the kernel. Ratio printed: recycled / fresh time.
 //
 // Memory as in isomesh-server: glibc maps every allocation over 256 kB anew
-// (server/resources.cpp), so each refiner's arrays come fresh from the kernel, as in a session.
-// Without it glibc's heap would hand later iterations the pages of earlier ones (the 4 kB page
-// faults of a first refinement, a quarter of its time, would not be counted).
-// ISOMESH_BENCH_MALLOC=default keeps glibc's defaults.
+// (server/resources.cpp), so arrays the refiner does not recycle itself come fresh from the
+// kernel, as in a session. Without it glibc's heap would hand later iterations the pages of
+// earlier ones. ISOMESH_BENCH_MALLOC=default keeps glibc's defaults.
 // - queue/<kind>: the same refinement with the bucket queue and with the binary heap, and
 //   queue_ops/<kind>: the queues alone on a ROAM-like trace (pop the top, push two children with a
 //   fraction of its priority, remove one other element). Ratio printed: heap time / bucket time.
@@ -33,6 +35,7 @@
 #include "expr/parameters.h"
 #include "polygonize/polygonizer.h"
 #include "progressive/pipeline.h"
+#include "refine/array_memory.h"
 #include "refine/refiner.h"
 
 namespace isomesh {
@@ -117,6 +120,13 @@ void refine_to(benchmark::State& state, const Surface& surface, const char* meas
 void BM_Refine(benchmark::State& state, const Surface* surface, const char* measure) {
     refine_to(state, *surface, measure, QueueKind::Bucket,
               std::string("refine/") + surface->name + "/" + measure);
+}
+
+void BM_RefineFresh(benchmark::State& state, const Surface* surface) {
+    set_recycled_memory_limit(0);
+    refine_to(state, *surface, "distance", QueueKind::Bucket,
+              std::string("refine_fresh/") + surface->name + "/distance");
+    set_recycled_memory_limit(kDefaultRecycledMemoryBytes);
 }
 
 void BM_QueueRefine(benchmark::State& state, QueueKind kind) {
@@ -207,6 +217,9 @@ void register_all() {
             benchmark::RegisterBenchmark((std::string("refine/") + s.name + "/" + measure).c_str(),
                                          BM_Refine, &s, measure)
                 ->Unit(benchmark::kMillisecond);
+        benchmark::RegisterBenchmark((std::string("refine_fresh/") + s.name + "/distance").c_str(),
+                                     BM_RefineFresh, &s)
+            ->Unit(benchmark::kMillisecond);
     }
     benchmark::RegisterBenchmark("queue/bucket", BM_QueueRefine, QueueKind::Bucket)
         ->Unit(benchmark::kMillisecond);
@@ -240,6 +253,8 @@ void print_ratios() {
         const std::string n = s.name;
         print_ratio(("epsilon4 time / distance time, " + n).c_str(), "refine/" + n + "/epsilon4",
                     "refine/" + n + "/distance");
+        print_ratio(("recycled / fresh memory time, " + n).c_str(), "refine/" + n + "/distance",
+                    "refine_fresh/" + n + "/distance");
     }
     print_ratio("heap / bucket, whole refinement", "queue/heap", "queue/bucket");
     print_ratio("heap / bucket, queue operations alone", "queue_ops/heap", "queue_ops/bucket");

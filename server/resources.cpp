@@ -6,6 +6,8 @@
 #include <malloc.h>
 #include <unistd.h>
 
+#include "refine/array_memory.h"
+
 namespace isomesh::server {
 
 Clock::duration thread_cpu_time() {
@@ -26,6 +28,7 @@ std::uint64_t resident_bytes() {
 }
 
 void release_free_memory() {
+    release_recycled_memory();  // the refiners' kept arrays (refine/array_memory.h)
     malloc_trim(0);
 }
 

@@ -16,8 +16,9 @@ Clock::duration thread_cpu_time();
 /// The process's resident set size (/proc/self/statm), 0 when unknown.
 std::uint64_t resident_bytes();
 
-/// Hands freed heap memory back to the system (glibc's malloc_trim): after sessions end, the
-/// process's resident size falls back instead of staying at its peak.
+/// Hands freed heap memory back to the system (glibc's malloc_trim, and the arrays of ended
+/// refiners kept for the next ones): after sessions end, the process's resident size falls back
+/// instead of staying at its peak.
 void release_free_memory();
 
 /// Sets up glibc's allocator for a long-running server, before any thread starts: blocks of

@@ -16,7 +16,7 @@
 #include <glm/vec3.hpp>
 
 #include "mesh/mesh.h"
-#include "refine/huge_pages.h"
+#include "refine/array_memory.h"
 
 namespace isomesh {
 
@@ -64,7 +64,7 @@ class IdRuns {
   private:
     static constexpr std::uint32_t kNoChange = ~std::uint32_t{0};
     // The runs by id (compact ids: by_id_[id - lo]) or sorted (id, index) keys.
-    HugePageVector<Run> by_id_;
+    RecycledVector<Run> by_id_;
     std::vector<std::uint64_t> keys_;
 };
 
@@ -89,9 +89,9 @@ class DeltaBuilder {
     }
     void remove_triangle(std::uint32_t id) { triangles_.push_back({Change::Removed, {id, {}}}); }
     /// Room for this many changes logged at once.
-    void reserve(std::size_t vertex_changes, std::size_t triangle_changes) {
-        vertices_.reserve(vertex_changes);
-        triangles_.reserve(triangle_changes);
+    void reserve(Reservation vertex_changes, Reservation triangle_changes) {
+        isomesh::reserve(vertices_, vertex_changes);
+        isomesh::reserve(triangles_, triangle_changes);
     }
     /// The net delta since construction or the last take(); resets the builder. Preconditions
     /// (not checked): a vertex id is added at most once and not changed after its removal; a
@@ -109,8 +109,8 @@ class DeltaBuilder {
         DeltaTriangle triangle;
     };
 
-    HugePageVector<VertexChange> vertices_;
-    HugePageVector<TriangleChange> triangles_;
+    RecycledVector<VertexChange> vertices_;
+    RecycledVector<TriangleChange> triangles_;
     IdRuns runs_;  // scratch of take(), kept between calls
 };
 
@@ -132,9 +132,9 @@ class SlotDeltaLog {
         triangles_.push_back({id, slot, Change::Added});
     }
     void remove_triangle(std::uint32_t id) { triangles_.push_back({id, 0, Change::Removed}); }
-    void reserve(std::size_t vertex_changes, std::size_t triangle_changes) {
-        vertices_.reserve(vertex_changes);
-        triangles_.reserve(triangle_changes);
+    void reserve(Reservation vertex_changes, Reservation triangle_changes) {
+        isomesh::reserve(vertices_, vertex_changes);
+        isomesh::reserve(triangles_, triangle_changes);
     }
     /// Forgets the changes logged so far.
     void clear() {
@@ -155,8 +155,8 @@ class SlotDeltaLog {
         Change change;
     };
 
-    HugePageVector<Entry> vertices_;
-    HugePageVector<Entry> triangles_;
+    RecycledVector<Entry> vertices_;
+    RecycledVector<Entry> triangles_;
     IdRuns runs_;
 };
 

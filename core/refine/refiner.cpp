@@ -224,28 +224,29 @@ std::vector<ValueGradient> Refiner::Impl::missing_gradients(const Mesh& mesh) {
 }
 
 void Refiner::Impl::reserve_for(std::size_t root_triangles) {
-    // Growing the pools by doubling maps fresh pages twice over (a quarter of the time of a
-    // refinement from scratch went to page faults): make room for the budget at once, within
-    // reason (a bound far above what a mesh reaches does not reserve its memory), and at most a
-    // few times the roots: a pool of 1 MB or more is on huge pages, each zeroed whole (2 MB) when
-    // first touched, and a server's new session starts from a few hundred roots under a budget of
-    // 20,000 (with 1,000 new sessions the kernel zeroing those pages was 54% of the server's CPU
-    // time, bench/load/run.sh). Beyond, the pools grow by doubling, on huge pages.
+    // Room for the budget at once where recycled memory holds it (Reservation), within reason (a
+    // bound far above what a mesh reaches does not reserve its memory); else for a few times the
+    // roots, growing by doubling from there.
     constexpr std::size_t kMostReserved = 500'000;
     constexpr std::size_t kRootGrowth = 4;
+    const auto leaves_for = [&](std::size_t budget) {
+        return std::min(kMostReserved, std::max(root_triangles, budget));
+    };
     const std::size_t budget = constraint_.triangle_limit().value_or(0);
-    const std::size_t leaves = std::min(
-        kMostReserved, std::max(root_triangles, std::min(budget, kRootGrowth * root_triangles)));
-    const std::size_t triangles = 2 * leaves + root_triangles;
+    const std::size_t leaves = leaves_for(budget);
+    const std::size_t few = leaves_for(std::min(budget, kRootGrowth * root_triangles));
+    const Reservation triangles(2 * leaves + root_triangles, 2 * few + root_triangles);
+    const Reservation vertices(leaves / 2 + 3, few / 2 + 3);
+    const Reservation records(leaves / 2 + 1, few / 2 + 1);
     triangles_.reserve(triangles);
-    vertices_.reserve(leaves / 2 + 3);
-    records_.reserve(leaves / 2 + 1);
+    vertices_.reserve(vertices);
+    records_.reserve(records);
     // Queue handles are triangle and record slots; the delta logs one change per triangle made
     // or removed and per vertex made.
     split_queue_->reserve(triangles);
     blocked_queue_->reserve(triangles);
-    merge_queue_->reserve(leaves / 2 + 1);
-    delta_.reserve(leaves / 2 + 3, 2 * triangles);
+    merge_queue_->reserve(records);
+    delta_.reserve(vertices, {2 * triangles.wanted, 2 * triangles.fallback});
 }
 
 void Refiner::Impl::clear_all_into_delta() {

@@ -17,7 +17,7 @@
 #include <glm/geometric.hpp>
 
 #include "mesh/topology.h"
-#include "refine/huge_pages.h"
+#include "refine/array_memory.h"
 #include "refine/refiner.h"
 
 namespace isomesh {
@@ -93,7 +93,7 @@ class Pool {
         return static_cast<std::uint32_t>(items_.size() - 1);
     }
     void release(std::uint32_t slot) { free_.push_back(slot); }
-    void reserve(std::size_t n) { items_.reserve(n); }
+    void reserve(Reservation n) { isomesh::reserve(items_, n); }
     void clear() {
         items_.clear();
         free_.clear();
@@ -103,7 +103,7 @@ class Pool {
     std::uint32_t size() const { return static_cast<std::uint32_t>(items_.size()); }
 
   private:
-    HugePageVector<T> items_;
+    RecycledVector<T> items_;
     std::vector<std::uint32_t> free_;
 };
 

@@ -19,7 +19,7 @@ double ordering_value(double priority) {
 }  // NaN -> 0
 
 template <typename T>
-void grow_to(HugePageVector<T>& v, std::uint32_t handle, const T& fill) {
+void grow_to(RecycledVector<T>& v, std::uint32_t handle, const T& fill) {
     if (handle >= v.size()) v.resize(static_cast<std::size_t>(handle) + 1, fill);
 }
 
@@ -311,10 +311,10 @@ double HeapQueue::extreme_priority() const {
     return heap_.empty() ? 0.0 : ordering_value(priority_[heap_.front()]);
 }
 
-void HeapQueue::reserve(std::size_t handles) {
-    heap_.reserve(handles);
-    position_.reserve(handles);
-    priority_.reserve(handles);
+void HeapQueue::reserve(Reservation handles) {
+    isomesh::reserve(heap_, handles);
+    isomesh::reserve(position_, handles);
+    isomesh::reserve(priority_, handles);
 }
 
 void HeapQueue::clear() {

@@ -25,7 +25,7 @@
 #include <limits>
 #include <vector>
 
-#include "refine/huge_pages.h"
+#include "refine/array_memory.h"
 
 namespace isomesh {
 
@@ -61,8 +61,8 @@ class PriorityQueue {
     /// is exhausted. The queue must not be modified during the visit.
     virtual void visit_in_order(const std::function<bool(std::uint32_t)>& visit) const = 0;
     /// Room for handles below `handles` at once (growing the per-handle arrays by doubling maps
-    /// fresh pages again and again).
-    virtual void reserve(std::size_t handles) = 0;
+    /// fresh pages again and again; see Reservation).
+    virtual void reserve(Reservation handles) = 0;
     /// The exact extreme priority (the largest for HighestFirst, the smallest for LowestFirst);
     /// 0 when empty. BucketQueue scans the first bucket for it.
     virtual double extreme_priority() const = 0;
@@ -92,7 +92,7 @@ class BucketQueue final : public PriorityQueue {
     void visit_in_order(const std::function<bool(std::uint32_t)>& visit) const override;
     double extreme_priority() const override;
     void clear() override;
-    void reserve(std::size_t handles) override { links_.reserve(handles); }
+    void reserve(Reservation handles) override { isomesh::reserve(links_, handles); }
 
     /// The bucket `priority` falls into (exposed for tests).
     std::uint32_t bucket_of(double priority) const;
@@ -128,7 +128,7 @@ class BucketQueue final : public PriorityQueue {
     mutable std::vector<List> heads_;
     std::vector<std::uint64_t> occupied_;  // one bit per bucket
     std::vector<std::uint64_t> summary_;   // one bit per word of occupied_
-    HugePageVector<Link> links_;           // indexed by handle
+    RecycledVector<Link> links_;           // indexed by handle
     std::size_t size_ = 0;
 };
 
@@ -146,7 +146,7 @@ class HeapQueue final : public PriorityQueue {
     void visit_in_order(const std::function<bool(std::uint32_t)>& visit) const override;
     double extreme_priority() const override;
     void clear() override;
-    void reserve(std::size_t handles) override;
+    void reserve(Reservation handles) override;
 
   private:
     bool before(std::uint32_t a, std::uint32_t b) const;  // a comes out of the queue before b
@@ -155,9 +155,9 @@ class HeapQueue final : public PriorityQueue {
     void place(std::size_t index, std::uint32_t handle);
 
     QueueOrder order_;
-    HugePageVector<std::uint32_t> heap_;
-    HugePageVector<std::uint32_t> position_;  // indexed by handle; kNone: not in the queue
-    HugePageVector<double> priority_;         // indexed by handle
+    RecycledVector<std::uint32_t> heap_;
+    RecycledVector<std::uint32_t> position_;  // indexed by handle; kNone: not in the queue
+    RecycledVector<double> priority_;         // indexed by handle
 };
 
 }  // namespace isomesh
