@@ -26,8 +26,9 @@ inline constexpr std::size_t kDefaultTriangleCap = 2'000'000;
 
 inline constexpr std::string_view kRefineUsage =
     R"(  --triangles N       refine (phase 2) to N triangles: met within 1 and never exceeded
-                      (phase 1's mesh is simplified to N first if it has more, keeping its
-                      topology; where that topology needs more than N triangles, the result is
+                      (phase 1's mesh, if it has more, is simplified to N/2 first where its
+                      topology allows, else to N, and split back to N by error; where
+                      that topology needs more than N triangles, the result is
                       the smallest mesh found, and --stats says budget_unreachable)
   --max-error E       refine until no triangle's error exceeds E (with --triangles as a
                       cap, else at most 2,000,000 triangles)

@@ -12,9 +12,10 @@
 // replaces the whole mesh (the step's delta removes every triangle and adds the new ones:
 // `restarted`). From then on the refiner splits and merges until the constraint is met.
 //
-// The triangle budget is a bound at every step: a phase-1 mesh over it is simplified to it with
-// topology-preserving collapses first (after the first mesh, over as many steps as that takes,
-// the mesh shown so far staying until then: no step runs for seconds). Where no mesh of that
+// The triangle budget is a bound at every step: a phase-1 mesh over it is simplified below it
+// (simplify_share) with topology-preserving collapses first (after the first mesh, over as many
+// steps as that takes, the mesh shown so far staying until then: no step runs for seconds), and
+// the refiner's splits spend the rest by error. Where no mesh of that
 // topology fits (a surface with more components or handles than the budget has triangles for), the
 // mesh is the smallest those collapses reach, and status().budget_unreachable says so.
 //
@@ -73,6 +74,9 @@ struct PipelineSettings {
     /// 86 kB, a third of its stream at 100,000 triangles); a slow one shows a new mesh at most
     /// about four times a second.
     std::int64_t min_intermediate_interval = 250'000;
+    /// A phase-1 mesh over the triangle budget is simplified to this share of it (where its
+    /// topology allows), and the refiner's splits spend the rest by error. In [0, 1].
+    double simplify_share = 0.5;
 };
 
 /// Where the mesh stands.
@@ -157,7 +161,7 @@ class Pipeline {
     PolygonizeSettings phase1_settings() const;
     PolygonizeResult phase1_mesh(const WorkBudget& budget);
     void record_phase1_mesh(const PolygonizeResult& result);
-    /// Makes `mesh` (a phase-1 mesh) the refiner's roots, simplified to the budget first where
+    /// Makes `mesh` (a phase-1 mesh) the refiner's roots, simplified below the budget first where
     /// it is over it: at once, or (`sliced`) over this and the next steps, the refiner showing
     /// its mesh until then.
     void install(Mesh mesh, const WorkBudget& budget, bool sliced = false);
@@ -165,6 +169,10 @@ class Pipeline {
     bool continue_install(const WorkBudget& budget);
     void set_roots(Mesh root);
     Mesh fit_to_budget(Mesh mesh, const WorkBudget& budget);
+    /// The simplifier's second target, simplify_share of the budget.
+    std::size_t halved_target() const;
+    /// Whether the mesh simplified on towards halved_target replaces the one at the budget.
+    bool keep_halved(const SimplifyReport& halved) const;
     bool keeps_moved_mesh(const Mesh& fresh) const;
     void refine(PipelineStep& out, const StepBudget& budget);
     void move_vertices(PipelineStep& out, const WorkBudget& budget);
@@ -184,7 +192,9 @@ class Pipeline {
     RefineCounters retired_counters_;
     std::optional<Mesh> installed_;  // the last phase-1 mesh installed, before simplification
     std::unique_ptr<Simplification> simplifying_;  // installed_ on its way to the refiner
-    std::optional<PolygonizeResult> final_mesh_;   // phase 1's, made, to install next step
+    bool halving_ = false;           // simplifying_ goes to the budget, then on to its share
+    std::optional<Mesh> at_budget_;  // simplifying_ goes on from this mesh at the budget
+    std::optional<PolygonizeResult> final_mesh_;  // phase 1's, made, to install next step
     bool intermediate_ = false;  // an intermediate phase-1 mesh is being made (mesh_slice)
     std::size_t classified_at_last_mesh_ = 0;
     /// Budget units spent in phase-1 steps since the last phase-1 mesh.
