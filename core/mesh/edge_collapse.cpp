@@ -186,35 +186,27 @@ void CollapseMesh::revive(std::uint32_t t, const Triangle& tri) {
     ++live_;
 }
 
-void CollapseMesh::compact() {
+Mesh CollapseMesh::compacted() const {
+    Mesh result;
     std::vector<std::uint32_t> new_index(mesh_.positions.size(), kDead);
-    std::uint32_t next = 0;
     for (std::uint32_t v = 0; v < new_index.size(); ++v) {
         if (incident_[v].empty()) continue;
-        new_index[v] = next;
-        mesh_.positions[next] = mesh_.positions[v];
-        if (!mesh_.normals.empty()) mesh_.normals[next] = mesh_.normals[v];
-        if (!mesh_.gradient_norms.empty()) mesh_.gradient_norms[next] = mesh_.gradient_norms[v];
-        incident_[next] = std::move(incident_[v]);
-        ++next;
+        new_index[v] = static_cast<std::uint32_t>(result.positions.size());
+        result.positions.push_back(mesh_.positions[v]);
+        if (!mesh_.normals.empty()) result.normals.push_back(mesh_.normals[v]);
+        if (!mesh_.gradient_norms.empty()) result.gradient_norms.push_back(mesh_.gradient_norms[v]);
     }
-    mesh_.positions.resize(next);
-    if (!mesh_.normals.empty()) mesh_.normals.resize(next);
-    if (!mesh_.gradient_norms.empty()) mesh_.gradient_norms.resize(next);
-    incident_.resize(next);
-    std::vector<std::uint32_t> new_triangle(mesh_.triangles.size(), kDead);
-    std::size_t kept = 0;
-    for (std::size_t t = 0; t < mesh_.triangles.size(); ++t) {
-        const Triangle& tri = mesh_.triangles[t];
+    result.triangles.reserve(live_);
+    for (const Triangle& tri : mesh_.triangles) {
         if (tri[0] == kDead) continue;
-        new_triangle[t] = static_cast<std::uint32_t>(kept);
-        mesh_.triangles[kept++] = {new_index[tri[0]], new_index[tri[1]], new_index[tri[2]]};
+        result.triangles.push_back({new_index[tri[0]], new_index[tri[1]], new_index[tri[2]]});
     }
-    mesh_.triangles.resize(kept);
-    for (auto& list : incident_)
-        for (std::uint32_t& t : list) t = new_triangle[t];
-    mesh_.neighbours.clear();
-    mesh_.base_edge.clear();
+    return result;
+}
+
+void CollapseMesh::compact() {
+    mesh_ = compacted();
+    incident_.clear();  // nothing follows
 }
 
 }  // namespace isomesh

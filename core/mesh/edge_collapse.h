@@ -68,8 +68,10 @@ class CollapseMesh {
     void kill(std::uint32_t t);
     void revive(std::uint32_t t, const Triangle& tri);
 
-    /// Drops dead triangles and unused vertices, keeping the order of the rest; clears neighbours
-    /// and base edges (adjacency is not kept). The last call: nothing else may follow it.
+    /// The live mesh as a Mesh of its own: dead triangles and unused vertices dropped, the order
+    /// of the rest kept, no adjacency (neighbours and base edges empty).
+    Mesh compacted() const;
+    /// Makes the mesh compacted() in place. The last call: nothing else may follow it.
     void compact();
 
   private:

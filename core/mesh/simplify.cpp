@@ -72,17 +72,12 @@ class Simplifier {
 
     /// Collapses until the mesh has at most `target` triangles, no candidate is left, or the
     /// budget is exhausted (checked every kCheckInterval candidates); true when not stopped by
-    /// the budget. Resumable: a later call goes on with the same queue.
-    bool advance(std::size_t target, const WorkBudget& budget, SimplifyReport& report) {
-        if (!prepare(budget)) {
-            report.cancelled = budget.cancelled();
-            return false;
-        }
+    /// the budget. Resumable: a later call goes on with the same queue (and the same quadrics:
+    /// going on to a smaller target measures the error against the original surface's planes).
+    bool advance(std::size_t target, const WorkBudget& budget, std::size_t& collapses) {
+        if (!prepare(budget)) return false;
         while (mesh_.live_triangles() > target && !queue_.empty()) {
-            if (++popped_ % kCheckInterval == 0 && budget.exhausted()) {
-                report.cancelled = budget.cancelled();
-                return false;
-            }
+            if (++popped_ % kCheckInterval == 0 && budget.exhausted()) return false;
             const Candidate c = queue_.top();
             queue_.pop();
             if (c.stamp_v != stamps_[c.v] || c.stamp_u != stamps_[c.u]) continue;
@@ -92,24 +87,14 @@ class Simplifier {
                 continue;
             }
             collapse(c.v, c.u);
-            ++report.collapses;
+            ++collapses;
         }
-        report.triangles = mesh_.live_triangles();
-        report.reached = report.triangles <= target;
         return true;
     }
 
+    std::size_t live_triangles() const { return mesh_.live_triangles(); }
+    Mesh compacted() const { return mesh_.compacted(); }
     void compact() { mesh_.compact(); }
-
-    SimplifyReport run(std::size_t target, const WorkBudget& budget) {
-        SimplifyReport report;
-        if (!advance(target, budget, report)) {
-            report.cancelled = true;  // cut short, by cancellation or by time
-            report.triangles = mesh_.live_triangles();
-        }
-        mesh_.compact();
-        return report;
-    }
 
   private:
     /// The quadrics of every vertex, then every edge's candidates, a chunk between two looks at
@@ -210,14 +195,13 @@ class Simplifier {
 }  // namespace
 
 SimplifyReport simplify_to_budget(Mesh& mesh, std::span<const std::uint8_t> box_faces,
-                                  std::size_t target_triangles, const WorkBudget& budget) {
-    if (mesh.triangle_count() <= target_triangles) {
-        SimplifyReport report;
-        report.triangles = mesh.triangle_count();
-        report.reached = true;
-        return report;
-    }
-    return Simplifier(mesh, box_faces).run(target_triangles, budget);
+                                  SimplifyTarget target, const WorkBudget& budget) {
+    Simplification simplification(std::move(mesh), {box_faces.begin(), box_faces.end()}, target);
+    const bool done = simplification.advance(budget);
+    mesh = simplification.take();
+    SimplifyReport report = simplification.report();
+    report.cancelled = report.cancelled || !done;  // cut short, by cancellation or by time
+    return report;
 }
 
 class Simplification::Collapses : public Simplifier {
@@ -226,13 +210,14 @@ class Simplification::Collapses : public Simplifier {
 };
 
 Simplification::Simplification(Mesh mesh, std::vector<std::uint8_t> box_faces,
-                               std::size_t target_triangles)
+                               SimplifyTarget target)
     : mesh_(std::make_unique<Mesh>(std::move(mesh))),
       box_faces_(std::move(box_faces)),
-      target_(target_triangles) {
-    if (mesh_->triangle_count() <= target_) {
+      target_(target) {
+    if (mesh_->triangle_count() <= target_.limit) {
         report_.triangles = mesh_->triangle_count();
         report_.reached = true;
+        report_.reached_preferred = report_.triangles <= target_.preferred;
         done_ = true;
         return;
     }
@@ -243,13 +228,46 @@ Simplification::~Simplification() = default;
 
 bool Simplification::advance(const WorkBudget& budget) {
     if (done_) return true;
-    done_ = collapses_->advance(target_, budget, report_);
-    if (done_) collapses_->compact();
-    return done_;
+    report_.cancelled = false;
+    if (!at_limit_) {
+        if (!collapses_->advance(target_.limit, budget, report_.collapses)) {
+            report_.cancelled = budget.cancelled();
+            return false;
+        }
+        report_.reached = collapses_->live_triangles() <= target_.limit;
+        if (!report_.reached || target_.preferred >= target_.limit) return finish();
+        at_limit_ = collapses_->compacted();
+    }
+    if (!collapses_->advance(target_.preferred, budget, report_.collapses)) {
+        report_.cancelled = budget.cancelled();
+        return false;
+    }
+    return finish();
+}
+
+bool Simplification::finish() {
+    report_.reached_preferred = collapses_->live_triangles() <= target_.preferred;
+    if (at_limit_ && !report_.reached_preferred) {
+        collapses_.reset();
+        *mesh_ = std::move(*at_limit_);
+    } else {
+        collapses_->compact();
+    }
+    at_limit_.reset();
+    report_.triangles = mesh_->triangle_count();
+    done_ = true;
+    return true;
 }
 
 Mesh Simplification::take() {
-    assert(done_);
+    if (!done_ && at_limit_) {
+        collapses_.reset();
+        *mesh_ = std::move(*at_limit_);
+    } else if (!done_) {
+        collapses_->compact();
+    }
+    report_.triangles = mesh_->triangle_count();
+    at_limit_.reset();
     collapses_.reset();
     return std::move(*mesh_);
 }

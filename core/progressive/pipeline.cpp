@@ -285,43 +285,30 @@ bool Pipeline::keeps_moved_mesh(const Mesh& fresh) const {
            same_topology(analyze_topology(fresh), refiner_->root_topology());
 }
 
-std::size_t Pipeline::halved_target() const {
-    const double share = std::clamp(settings_.simplify_share, 0.0, 1.0);
-    const std::size_t limit = settings_.refine.constraint.triangle_limit().value_or(SIZE_MAX);
-    return std::max<std::size_t>(1, static_cast<std::size_t>(static_cast<double>(limit) * share));
-}
-
 // Collapses alone leave the coarse parts of a phase-1 mesh as they were; simplified below the
 // budget, the refiner's error-driven splits place the rest where the surface needs them (bear.vm
 // at 20,000: error_max 1.4e-3 -> 1.7e-4; the heart 7.2e-3 -> 4.8e-5). Where the topology alone
-// needs more than the share (the blobby cube's 983 components), the mesh at the budget is kept:
-// collapsing on to the topology's floor only coarsens the small parts, which splits never reach.
-bool Pipeline::keep_halved(const SimplifyReport& halved) const {
-    return halved.reached;
+// needs more than the share (the blobby cube's 983 components), the mesh at the budget is kept
+// (SimplifyTarget): collapsing on to the topology's floor only coarsens the small parts, which
+// splits never reach.
+SimplifyTarget Pipeline::simplify_target() const {
+    const double share = std::clamp(settings_.simplify_share, 0.0, 1.0);
+    const std::size_t limit = settings_.refine.constraint.triangle_limit().value_or(SIZE_MAX);
+    const auto preferred = static_cast<std::size_t>(static_cast<double>(limit) * share);
+    return {limit, std::max<std::size_t>(1, preferred)};
+}
+
+void Pipeline::record_simplification(const SimplifyReport& report) {
+    status_.budget_unreachable = !report.reached && !report.cancelled;
+    status_.minimum_triangles = status_.budget_unreachable ? report.triangles : 0;
 }
 
 Mesh Pipeline::fit_to_budget(Mesh mesh, const WorkBudget& budget) {
-    status_.budget_unreachable = false;
-    status_.minimum_triangles = 0;
-    const std::optional<std::size_t> limit = settings_.refine.constraint.triangle_limit();
-    if (!limit || mesh.triangle_count() <= *limit) {
-        if (mesh.neighbours.empty()) build_adjacency(mesh);  // phase 1 leaves it to us
-        return mesh;
-    }
     // Not cut short by the step's time: a mesh over the budget may not be shown.
     const WorkBudget whole(budget.cancel_flag());
-    const SimplifyReport report =
-        simplify_to_budget(mesh, box_faces(mesh, settings_.phase1.box), *limit, whole);
-    if (!report.reached && !report.cancelled) {
-        status_.budget_unreachable = true;
-        status_.minimum_triangles = report.triangles;
-    } else if (report.reached) {
-        Mesh halved = mesh;
-        const SimplifyReport further = simplify_to_budget(
-            halved, box_faces(halved, settings_.phase1.box), halved_target(), whole);
-        if (keep_halved(further)) mesh = std::move(halved);
-    }
-    build_adjacency(mesh);
+    record_simplification(
+        simplify_to_budget(mesh, box_faces(mesh, settings_.phase1.box), simplify_target(), whole));
+    if (mesh.neighbours.empty()) build_adjacency(mesh);  // phase 1 leaves it to us
     return mesh;
 }
 
@@ -331,11 +318,8 @@ void Pipeline::install(Mesh mesh, const WorkBudget& budget, bool sliced) {
     canonical_pending_ = false;
     installed_ = mesh;
     std::vector<std::uint8_t> faces = box_faces(mesh, settings_.phase1.box);
-    const std::optional<std::size_t> limit = settings_.refine.constraint.triangle_limit();
-    halving_ = limit && mesh.triangle_count() > *limit;
-    at_budget_.reset();
-    simplifying_ = std::make_unique<Simplification>(std::move(mesh), std::move(faces),
-                                                    limit.value_or(SIZE_MAX));
+    simplifying_ =
+        std::make_unique<Simplification>(std::move(mesh), std::move(faces), simplify_target());
     // The first mesh must be there after the first step; a later one may take several.
     continue_install(sliced && refiner_ ? budget : WorkBudget(budget.cancel_flag()));
 }
@@ -345,26 +329,9 @@ bool Pipeline::continue_install(const WorkBudget& budget) {
         if (budget.cancelled()) simplifying_.reset();
         return false;
     }
-    if (halving_) {
-        halving_ = false;
-        if (simplifying_->report().reached) {  // at the budget: on to the share of it
-            at_budget_ = simplifying_->take();
-            std::vector<std::uint8_t> faces = box_faces(*at_budget_, settings_.phase1.box);
-            simplifying_ =
-                std::make_unique<Simplification>(*at_budget_, std::move(faces), halved_target());
-            return continue_install(budget);
-        }
-    }
-    SimplifyReport report = simplifying_->report();
+    record_simplification(simplifying_->report());
     Mesh root = simplifying_->take();
     simplifying_.reset();
-    if (at_budget_) {
-        if (!keep_halved(report)) root = std::move(*at_budget_);
-        report.reached = true;  // the budget was
-        at_budget_.reset();
-    }
-    status_.budget_unreachable = !report.reached;
-    status_.minimum_triangles = report.reached ? 0 : report.triangles;
     if (root.neighbours.empty()) build_adjacency(root);  // simplified: compacted
     set_roots(std::move(root));
     return true;

@@ -169,10 +169,9 @@ class Pipeline {
     bool continue_install(const WorkBudget& budget);
     void set_roots(Mesh root);
     Mesh fit_to_budget(Mesh mesh, const WorkBudget& budget);
-    /// The simplifier's second target, simplify_share of the budget.
-    std::size_t halved_target() const;
-    /// Whether the mesh simplified on towards halved_target replaces the one at the budget.
-    bool keep_halved(const SimplifyReport& halved) const;
+    /// The budget, and simplify_share of it where the topology allows.
+    SimplifyTarget simplify_target() const;
+    void record_simplification(const SimplifyReport& report);
     bool keeps_moved_mesh(const Mesh& fresh) const;
     void refine(PipelineStep& out, const StepBudget& budget);
     void move_vertices(PipelineStep& out, const WorkBudget& budget);
@@ -192,9 +191,7 @@ class Pipeline {
     RefineCounters retired_counters_;
     std::optional<Mesh> installed_;  // the last phase-1 mesh installed, before simplification
     std::unique_ptr<Simplification> simplifying_;  // installed_ on its way to the refiner
-    bool halving_ = false;           // simplifying_ goes to the budget, then on to its share
-    std::optional<Mesh> at_budget_;  // simplifying_ goes on from this mesh at the budget
-    std::optional<PolygonizeResult> final_mesh_;  // phase 1's, made, to install next step
+    std::optional<PolygonizeResult> final_mesh_;   // phase 1's, made, to install next step
     bool intermediate_ = false;  // an intermediate phase-1 mesh is being made (mesh_slice)
     std::size_t classified_at_last_mesh_ = 0;
     /// Budget units spent in phase-1 steps since the last phase-1 mesh.
