@@ -59,15 +59,38 @@ std::vector<std::uint32_t> CollapseMesh::triangles_on_edge(std::uint32_t a, std:
     return result;
 }
 
-std::vector<std::uint32_t> CollapseMesh::neighbours(std::uint32_t v) const {
-    std::vector<std::uint32_t> result;
+std::size_t CollapseMesh::triangles_on_edge(std::uint32_t a, std::uint32_t b,
+                                            std::span<std::uint32_t> out) const {
+    if (incident_[b].size() < incident_[a].size()) std::swap(a, b);
+    std::size_t count = 0;
+    for (std::uint32_t t : incident_[a]) {
+        if (!contains(mesh_.triangles[t], b)) continue;
+        if (count < out.size()) out[count] = t;
+        ++count;
+    }
+    return count;
+}
+
+/// The other corners of v's triangles, sorted, each as often as it appears (once for a boundary
+/// edge, twice for an interior one).
+void CollapseMesh::other_corners(std::uint32_t v, std::vector<std::uint32_t>& out) const {
+    out.clear();
     for (std::uint32_t t : incident_[v]) {
         for (std::uint32_t w : mesh_.triangles[t]) {
-            if (w != v) result.push_back(w);
+            if (w != v) out.push_back(w);
         }
     }
-    std::sort(result.begin(), result.end());
-    result.erase(std::unique(result.begin(), result.end()), result.end());
+    std::sort(out.begin(), out.end());
+}
+
+void CollapseMesh::neighbours(std::uint32_t v, std::vector<std::uint32_t>& out) const {
+    other_corners(v, out);
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+std::vector<std::uint32_t> CollapseMesh::neighbours(std::uint32_t v) const {
+    std::vector<std::uint32_t> result;
+    neighbours(v, result);
     return result;
 }
 
@@ -75,14 +98,8 @@ bool CollapseMesh::on_boundary(std::uint32_t v) const {
     // An edge v-w is on the boundary when one triangle has it: w appears once among the other
     // corners of v's triangles (twice for an interior edge). Sorting them is O(k log k) in v's
     // valence k, where asking triangles_on_edge for each neighbour would be O(k^2).
-    std::vector<std::uint32_t> others;
-    others.reserve(2 * incident_[v].size());
-    for (std::uint32_t t : incident_[v]) {
-        for (std::uint32_t w : mesh_.triangles[t]) {
-            if (w != v) others.push_back(w);
-        }
-    }
-    std::sort(others.begin(), others.end());
+    other_corners(v, scratch_corners_);
+    const std::vector<std::uint32_t>& others = scratch_corners_;
     for (std::size_t i = 0; i < others.size();) {
         std::size_t j = i;
         while (j < others.size() && others[j] == others[i]) ++j;
@@ -92,26 +109,50 @@ bool CollapseMesh::on_boundary(std::uint32_t v) const {
     return false;
 }
 
+bool CollapseMesh::keeps_link(std::uint32_t v, std::uint32_t u,
+                              std::span<const std::uint32_t> opposite) const {
+    // The common neighbours of u and v, in order, must be exactly `opposite` (sorted).
+    neighbours(u, scratch_u_);
+    neighbours(v, scratch_v_);
+    std::size_t next = 0;
+    auto a = scratch_u_.begin(), b = scratch_v_.begin();
+    while (a != scratch_u_.end() && b != scratch_v_.end()) {
+        if (*a < *b) {
+            ++a;
+        } else if (*b < *a) {
+            ++b;
+        } else {
+            if (next == opposite.size() || opposite[next] != *a) return false;
+            ++next, ++a, ++b;
+        }
+    }
+    return next == opposite.size();
+}
+
 bool CollapseMesh::can_collapse(std::uint32_t v, std::uint32_t u) const {
     if ((box_faces_[v] & ~box_faces_[u]) != 0) return false;
-    const std::vector<std::uint32_t> on_edge = triangles_on_edge(u, v);
-    if (on_edge.empty() || on_edge.size() > 2) return false;
-    std::vector<std::uint32_t> opposite;
-    for (std::uint32_t t : on_edge) opposite.push_back(third(mesh_.triangles[t], u, v));
-    std::sort(opposite.begin(), opposite.end());
-    const std::vector<std::uint32_t> nu = neighbours(u), nv = neighbours(v);
-    std::vector<std::uint32_t> common;
-    std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
-    if (common != opposite) return false;
-    if (on_edge.size() == 2 && on_boundary(u) && on_boundary(v)) return false;
+    std::array<std::uint32_t, 2> on_edge{};
+    const std::size_t sharing = triangles_on_edge(u, v, on_edge);
+    if (sharing == 0 || sharing > 2) return false;
+    std::array<std::uint32_t, 2> opposite{};
+    for (std::size_t i = 0; i < sharing; ++i)
+        opposite[i] = third(mesh_.triangles[on_edge[i]], u, v);
+    if (sharing == 2 && opposite[1] < opposite[0]) std::swap(opposite[0], opposite[1]);
+    const std::span<const std::uint32_t> opposites(opposite.data(), sharing);
+    if (!keeps_link(v, u, opposites)) return false;
+    if (sharing == 2 && on_boundary(u) && on_boundary(v)) return false;
     // Each opposite vertex loses its triangle on u-v. An interior one must keep three (two would
     // be a degenerate fan, two triangles folded onto each other); one on the boundary, one (an
     // ear: where the surface meets the box near a lattice corner it sits on, its three triangles
     // must be able to become two, or the zero-length edge there stays).
-    for (std::uint32_t o : opposite) {
+    for (std::uint32_t o : opposites) {
         const std::size_t keeps = on_boundary(o) ? 1 : 3;
         if (incident_[o].size() < keeps + 1) return false;
     }
+    return keeps_orientation(v, u);
+}
+
+bool CollapseMesh::keeps_orientation(std::uint32_t v, std::uint32_t u) const {
     for (std::uint32_t t : incident_[v]) {
         const Triangle& tri = mesh_.triangles[t];
         if (contains(tri, u)) continue;
@@ -161,7 +202,10 @@ double CollapseMesh::quality_after_collapse(std::uint32_t v, std::uint32_t u) co
 }
 
 void CollapseMesh::collapse(std::uint32_t v, std::uint32_t u) {
-    for (std::uint32_t t : triangles_on_edge(u, v)) kill(t);
+    std::array<std::uint32_t, 2> on_edge{};
+    const std::size_t sharing = triangles_on_edge(u, v, on_edge);
+    assert(sharing <= on_edge.size());
+    for (std::size_t i = 0; i < sharing; ++i) kill(on_edge[i]);
     for (std::uint32_t t : incident_[v]) {
         for (std::uint32_t& w : mesh_.triangles[t]) {
             if (w == v) w = u;

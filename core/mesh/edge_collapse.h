@@ -14,6 +14,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -52,8 +53,13 @@ class CollapseMesh {
 
     /// Live triangles containing both a and b.
     std::vector<std::uint32_t> triangles_on_edge(std::uint32_t a, std::uint32_t b) const;
+    /// How many live triangles contain both a and b; the first out.size() of them go to `out`.
+    std::size_t triangles_on_edge(std::uint32_t a, std::uint32_t b,
+                                  std::span<std::uint32_t> out) const;
     /// The vertices sharing a live triangle with v, sorted.
     std::vector<std::uint32_t> neighbours(std::uint32_t v) const;
+    /// The same into `out` (its storage reused: no allocation once it is large enough).
+    void neighbours(std::uint32_t v, std::vector<std::uint32_t>& out) const;
     bool on_boundary(std::uint32_t v) const;
 
     /// Whether moving v onto u keeps the topology, the boundary on the box and every triangle's
@@ -75,6 +81,12 @@ class CollapseMesh {
     void compact();
 
   private:
+    void other_corners(std::uint32_t v, std::vector<std::uint32_t>& out) const;
+    /// The link condition: the common neighbours of u and v are `opposite` (sorted).
+    bool keeps_link(std::uint32_t v, std::uint32_t u,
+                    std::span<const std::uint32_t> opposite) const;
+    /// No triangle of v's flips or degenerates when v moves onto u.
+    bool keeps_orientation(std::uint32_t v, std::uint32_t u) const;
     /// The sum of the normals at `corners` (zero when the mesh has none).
     glm::dvec3 corner_normals(const Triangle& corners) const;
 
@@ -82,6 +94,9 @@ class CollapseMesh {
     std::span<const std::uint8_t> box_faces_;
     std::vector<std::vector<std::uint32_t>> incident_;
     std::size_t live_ = 0;
+    // Scratch space of the queries above (a CollapseMesh is used by one thread at a time): the
+    // simplifier asks them about a million times on a 100,000-triangle mesh.
+    mutable std::vector<std::uint32_t> scratch_corners_, scratch_u_, scratch_v_;
 };
 
 }  // namespace isomesh
