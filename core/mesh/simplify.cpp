@@ -54,7 +54,6 @@ constexpr std::size_t kCheckInterval = 256;
 struct Candidate {
     double cost;
     std::uint32_t v, u;  // move v onto u
-    std::uint32_t stamp_v, stamp_u;
     bool operator>(const Candidate& o) const {
         if (cost != o.cost) return cost > o.cost;
         if (v != o.v) return v > o.v;
@@ -113,7 +112,6 @@ class Simplifier {
     Simplifier(Mesh& mesh, std::span<const std::uint8_t> box_faces)
         : mesh_(mesh, box_faces),
           quadrics_(mesh.positions.size()),
-          stamps_(mesh.positions.size(), 0),
           blocked_(mesh.positions.size()) {}
 
     /// Collapses until the mesh has at most `target` triangles, no candidate is left, or the
@@ -126,8 +124,17 @@ class Simplifier {
             if (++popped_ % kCheckInterval == 0 && budget.exhausted()) return false;
             const Candidate c = queue_.top();
             queue_.pop();
-            if (c.stamp_v != stamps_[c.v] || c.stamp_u != stamps_[c.u]) continue;
-            if (mesh_.incident(c.v).empty()) continue;
+            if (mesh_.incident(c.v).empty() || mesh_.incident(c.u).empty()) continue;
+            // Quadrics only grow (each a sum of squared distances), so a candidate's cost only
+            // rises after it was pushed: its entry is a lower bound. The entry at the top whose
+            // cost is still its cost is the cheapest candidate; one whose cost rose goes back
+            // with it (lazy updates: a collapse pushes only its new edges, not every edge whose
+            // cost it changed, most of which are never popped).
+            const double cost = collapse_cost(c.v, c.u);
+            if (cost != c.cost) {
+                queue_.push({cost, c.v, c.u});
+                continue;
+            }
             if (too_many_neighbours(c.v, c.u) || !mesh_.can_collapse(c.v, c.u)) {
                 blocked_[c.v].push_back(c);  // until the neighbourhood changes
                 continue;
@@ -157,7 +164,10 @@ class Simplifier {
         while (prepared_vertices_ < quadrics_.size()) {
             const std::uint32_t end = std::min<std::uint32_t>(
                 static_cast<std::uint32_t>(quadrics_.size()), prepared_vertices_ + kChunk);
-            for (; prepared_vertices_ < end; ++prepared_vertices_) push_edges(prepared_vertices_);
+            for (; prepared_vertices_ < end; ++prepared_vertices_) {
+                mesh_.neighbours(prepared_vertices_, around_);
+                for (std::uint32_t w : around_) push(prepared_vertices_, w);
+            }
             if (budget.exhausted() && prepared_vertices_ < quadrics_.size()) return false;
         }
         return true;
@@ -200,30 +210,31 @@ class Simplifier {
         }
     }
 
-    /// Pushes both collapses of each of v's edges; leaves v's neighbours in around_.
-    void push_edges(std::uint32_t v) {
-        mesh_.neighbours(v, around_);
-        for (std::uint32_t w : around_) {
-            push(v, w);
-            push(w, v);
-        }
-    }
-
-    void push(std::uint32_t v, std::uint32_t u) {
+    /// Moving v onto u costs (Q_u + Q_v)(x_u).
+    double collapse_cost(std::uint32_t v, std::uint32_t u) const {
         Quadric q = quadrics_[u];
         q.add(quadrics_[v]);
-        queue_.push({q.error(mesh_.position(u)), v, u, stamps_[v], stamps_[u]});
+        return q.error(mesh_.position(u));
     }
 
+    void push(std::uint32_t v, std::uint32_t u) { queue_.push({collapse_cost(v, u), v, u}); }
+
     void collapse(std::uint32_t v, std::uint32_t u) {
+        // v's edges to vertices not next to u become u's: new candidates. The others' costs rose
+        // (u's quadric grew) and are brought up to date when popped.
+        mesh_.neighbours(u, around_);
+        mesh_.neighbours(v, around_v_);
         mesh_.collapse(v, u);
         quadrics_[u].add(quadrics_[v]);
-        ++stamps_[v];
-        // Costs change only on u's edges (its quadric grew): those candidates are made anew. The
-        // link and orientation tests change around u's neighbours too: candidates refused there
-        // are tried again.
-        ++stamps_[u];
-        push_edges(u);
+        for (std::uint32_t w : around_v_) {
+            if (w == u || std::binary_search(around_.begin(), around_.end(), w)) continue;
+            push(u, w);
+            push(w, u);
+        }
+        // The link and orientation tests change around u's neighbours and u: candidates refused
+        // there are tried again.
+        mesh_.neighbours(u, around_);
+        around_.push_back(u);
         for (std::uint32_t w : around_) {
             for (const Candidate& c : blocked_[w]) queue_.push(c);
             blocked_[w].clear();
@@ -232,9 +243,8 @@ class Simplifier {
 
     CollapseMesh mesh_;
     std::vector<Quadric> quadrics_;
-    std::vector<std::uint32_t> stamps_;
-    std::vector<std::vector<Candidate>> blocked_;  // refused candidates, by the vertex to move
-    std::vector<std::uint32_t> around_;            // push_edges' neighbours
+    std::vector<std::vector<Candidate>> blocked_;   // refused candidates, by the vertex to move
+    std::vector<std::uint32_t> around_, around_v_;  // neighbours, of u and of v
     CandidateHeap queue_;
     std::size_t popped_ = 0;
     std::uint32_t prepared_triangles_ = 0;  // prepare()'s progress
