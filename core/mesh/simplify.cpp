@@ -12,6 +12,8 @@
 #include <algorithm>
 #include <array>
 #include <cassert>
+#include <cmath>
+#include <limits>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -210,11 +212,13 @@ class Simplifier {
         }
     }
 
-    /// Moving v onto u costs (Q_u + Q_v)(x_u).
+    /// Moving v onto u costs (Q_u + Q_v)(x_u); NaN (a vertex at no finite point) counts as
+    /// infinite, so that a popped cost always equals itself.
     double collapse_cost(std::uint32_t v, std::uint32_t u) const {
         Quadric q = quadrics_[u];
         q.add(quadrics_[v]);
-        return q.error(mesh_.position(u));
+        const double cost = q.error(mesh_.position(u));
+        return std::isnan(cost) ? std::numeric_limits<double>::infinity() : cost;
     }
 
     void push(std::uint32_t v, std::uint32_t u) { queue_.push({collapse_cost(v, u), v, u}); }

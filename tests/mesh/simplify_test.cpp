@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -38,6 +39,16 @@ TEST(Simplify, simplify_to_budget_keeps_topology_and_meets_the_target) {
     EXPECT_EQ(after.components, before.components);
     EXPECT_EQ(after.euler_characteristic, before.euler_characteristic);
     EXPECT_TRUE(after.manifold());
+}
+
+TEST(Simplify, simplify_to_budget_ends_with_a_vertex_at_no_finite_point) {
+    Mesh mesh = genus_two_mesh();
+    mesh.positions[mesh.vertex_count() / 2] = glm::dvec3(std::nan(""), 0.0, 0.0);
+    const std::vector<std::uint8_t> faces(mesh.vertex_count(), 0);
+    // Its collapse costs are NaN: ordered last, not popped and pushed back forever.
+    const SimplifyReport report = simplify_to_budget(mesh, faces, 1000);
+    EXPECT_TRUE(report.reached);
+    EXPECT_LE(mesh.triangle_count(), 1000u);
 }
 
 /// A budget of one unit on a clock that ticks at each look: a few hundred candidates a slice.
