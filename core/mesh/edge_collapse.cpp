@@ -94,36 +94,53 @@ std::vector<std::uint32_t> CollapseMesh::neighbours(std::uint32_t v) const {
     return result;
 }
 
-bool CollapseMesh::on_boundary(std::uint32_t v) const {
-    // An edge v-w is on the boundary when one triangle has it: w appears once among the other
-    // corners of v's triangles (twice for an interior edge). Sorting them is O(k log k) in v's
-    // valence k, where asking triangles_on_edge for each neighbour would be O(k^2).
-    other_corners(v, scratch_corners_);
-    const std::vector<std::uint32_t>& others = scratch_corners_;
-    for (std::size_t i = 0; i < others.size();) {
+namespace {
+
+/// Whether some value appears once in `sorted_corners` (other_corners' list): an edge with one
+/// triangle, on the boundary.
+bool has_single(const std::vector<std::uint32_t>& sorted_corners) {
+    for (std::size_t i = 0; i < sorted_corners.size();) {
         std::size_t j = i;
-        while (j < others.size() && others[j] == others[i]) ++j;
+        while (j < sorted_corners.size() && sorted_corners[j] == sorted_corners[i]) ++j;
         if (j - i == 1) return true;
         i = j;
     }
     return false;
 }
 
-bool CollapseMesh::keeps_link(std::uint32_t v, std::uint32_t u,
-                              std::span<const std::uint32_t> opposite) const {
-    // The common neighbours of u and v, in order, must be exactly `opposite` (sorted).
-    neighbours(u, scratch_u_);
-    neighbours(v, scratch_v_);
+/// The next value after *it in a sorted list with repeats.
+std::vector<std::uint32_t>::const_iterator next_value(
+    std::vector<std::uint32_t>::const_iterator it, std::vector<std::uint32_t>::const_iterator end) {
+    const std::uint32_t value = *it;
+    while (it != end && *it == value) ++it;
+    return it;
+}
+
+}  // namespace
+
+bool CollapseMesh::on_boundary(std::uint32_t v) const {
+    // An edge v-w is on the boundary when one triangle has it: w appears once among the other
+    // corners of v's triangles (twice for an interior edge). Sorting them is O(k log k) in v's
+    // valence k, where asking triangles_on_edge for each neighbour would be O(k^2).
+    other_corners(v, scratch_corners_);
+    return has_single(scratch_corners_);
+}
+
+bool CollapseMesh::keeps_link(std::span<const std::uint32_t> opposite) const {
+    // The values common to scratch_u_ and scratch_v_ (other_corners of u and v), in order, must
+    // be exactly `opposite` (sorted).
     std::size_t next = 0;
-    auto a = scratch_u_.begin(), b = scratch_v_.begin();
-    while (a != scratch_u_.end() && b != scratch_v_.end()) {
+    auto a = scratch_u_.cbegin(), b = scratch_v_.cbegin();
+    while (a != scratch_u_.cend() && b != scratch_v_.cend()) {
         if (*a < *b) {
-            ++a;
+            a = next_value(a, scratch_u_.cend());
         } else if (*b < *a) {
-            ++b;
+            b = next_value(b, scratch_v_.cend());
         } else {
             if (next == opposite.size() || opposite[next] != *a) return false;
-            ++next, ++a, ++b;
+            ++next;
+            a = next_value(a, scratch_u_.cend());
+            b = next_value(b, scratch_v_.cend());
         }
     }
     return next == opposite.size();
@@ -139,8 +156,10 @@ bool CollapseMesh::can_collapse(std::uint32_t v, std::uint32_t u) const {
         opposite[i] = third(mesh_.triangles[on_edge[i]], u, v);
     if (sharing == 2 && opposite[1] < opposite[0]) std::swap(opposite[0], opposite[1]);
     const std::span<const std::uint32_t> opposites(opposite.data(), sharing);
-    if (!keeps_link(v, u, opposites)) return false;
-    if (sharing == 2 && on_boundary(u) && on_boundary(v)) return false;
+    other_corners(u, scratch_u_);
+    other_corners(v, scratch_v_);
+    if (!keeps_link(opposites)) return false;
+    if (sharing == 2 && has_single(scratch_u_) && has_single(scratch_v_)) return false;
     // Each opposite vertex loses its triangle on u-v. An interior one must keep three (two would
     // be a degenerate fan, two triangles folded onto each other); one on the boundary, one (an
     // ear: where the surface meets the box near a lattice corner it sits on, its three triangles

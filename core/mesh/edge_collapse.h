@@ -82,9 +82,9 @@ class CollapseMesh {
 
   private:
     void other_corners(std::uint32_t v, std::vector<std::uint32_t>& out) const;
-    /// The link condition: the common neighbours of u and v are `opposite` (sorted).
-    bool keeps_link(std::uint32_t v, std::uint32_t u,
-                    std::span<const std::uint32_t> opposite) const;
+    /// The link condition, on other_corners of u and v in scratch_u_ and scratch_v_: the common
+    /// neighbours of u and v are `opposite` (sorted).
+    bool keeps_link(std::span<const std::uint32_t> opposite) const;
     /// No triangle of v's flips or degenerates when v moves onto u.
     bool keeps_orientation(std::uint32_t v, std::uint32_t u) const;
     /// The sum of the normals at `corners` (zero when the mesh has none).
