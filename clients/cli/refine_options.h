@@ -26,7 +26,7 @@ inline constexpr std::size_t kDefaultTriangleCap = 2'000'000;
 
 inline constexpr std::string_view kRefineUsage =
     R"(  --triangles N       refine (phase 2) to N triangles: met within 1 and never exceeded
-                      (phase 1's mesh, if it has more, is simplified to N/2 first where its
+                      (phase 1's mesh, if it has more, is simplified to N/4 first where its
                       topology allows, else to N, and split back to N by error; where
                       that topology needs more than N triangles, the result is
                       the smallest mesh found, and --stats says budget_unreachable)

@@ -75,8 +75,12 @@ struct PipelineSettings {
     /// about four times a second.
     std::int64_t min_intermediate_interval = 250'000;
     /// A phase-1 mesh over the triangle budget is simplified to this share of it (where its
-    /// topology allows), and the refiner's splits spend the rest by error. In [0, 1].
-    double simplify_share = 0.5;
+    /// topology allows), and the refiner's splits spend the rest by error. In [0, 1]. A quarter:
+    /// at 20,000 triangles (bench_pipeline, rms distance to the surface, share 0.1 / 0.25 / 0.5)
+    /// colonnade.vm 6.7e-4 / 4.8e-4 / 5.7e-4, bear.vm 3.8e-4 / 3.5e-4 / 3.5e-4, the heart
+    /// - / 2.3e-4 / 2.5e-4, the genus-2 surface - / 1.6e-4 / 1.7e-4: below a quarter the
+    /// collapses coarsen what the splits then fail to bring back.
+    double simplify_share = 0.25;
 };
 
 /// Where the mesh stands.
