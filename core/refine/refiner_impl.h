@@ -86,14 +86,20 @@ class Pool {
         if (!free_.empty()) {
             const std::uint32_t slot = free_.back();
             free_.pop_back();
+            if (!free_.empty()) prefetch_slot(&items_[free_.back()]);
             items_[slot] = T{};
             return slot;
         }
+        make_room(items_, items_.size() + 1, wanted_);
+        // The slots after the end are written next, a few allocations from now: their lines
+        // are asked for now (a write to a line not in the cache waits for it).
+        if (items_.size() + kAhead < items_.capacity())
+            prefetch_slot(items_.data() + items_.size() + kAhead);
         items_.emplace_back();
         return static_cast<std::uint32_t>(items_.size() - 1);
     }
     void release(std::uint32_t slot) { free_.push_back(slot); }
-    void reserve(Reservation n) { isomesh::reserve(items_, n); }
+    void reserve(Reservation n) { wanted_ = isomesh::reserve(items_, n); }
     void clear() {
         items_.clear();
         free_.clear();
@@ -103,7 +109,14 @@ class Pool {
     std::uint32_t size() const { return static_cast<std::uint32_t>(items_.size()); }
 
   private:
+    static constexpr std::size_t kAhead = 4;
+    static void prefetch_slot(const T* item) {
+        for (std::size_t line = 0; line < sizeof(T); line += 64)
+            __builtin_prefetch(reinterpret_cast<const char*>(item) + line, 1);
+    }
+
     RecycledVector<T> items_;
+    std::size_t wanted_ = 0;  // the room reserved for, where growth stops once (make_room)
     std::vector<std::uint32_t> free_;
 };
 

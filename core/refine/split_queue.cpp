@@ -79,7 +79,14 @@ inline void BucketQueue::set_occupied(std::uint32_t bucket, bool occupied) {
 
 void BucketQueue::insert(std::uint32_t handle, double priority) {
     assert(handle < kNotQueued);
-    grow_to(links_, handle, Link{});
+    if (handle >= links_.size()) {
+        make_room(links_, std::size_t{handle} + 1, links_wanted_);
+        links_.resize(std::size_t{handle} + 1, Link{});
+        // Handles are slots, mostly new ones in increasing order: the line of the links a few
+        // inserts ahead is asked for now.
+        if (std::size_t{handle} + 16 < links_.capacity())
+            __builtin_prefetch(links_.data() + handle + 16, 1);
+    }
     Link& link = links_[handle];
     assert(link.prev == kNotQueued && "insert: handle already queued");
     const std::uint32_t bucket = bucket_index(priority);
