@@ -127,11 +127,15 @@ std::size_t reserve(RecycledVector<T>& array, Reservation room) {
 /// up to 5/4 of the array): doubled from the fallback it ended in a block up to twice as large,
 /// which no later reservation took, so every refiner grew its arrays again by copying.
 template <typename T>
-void make_room(RecycledVector<T>& array, std::size_t size, std::size_t wanted) {
-    if (size <= array.capacity()) return;
+[[gnu::noinline]] void grow_room(RecycledVector<T>& array, std::size_t size, std::size_t wanted) {
     std::size_t next = std::max(size, 2 * array.capacity());
     if (size <= wanted && next > wanted) next = wanted;
     array.reserve(next);
+}
+template <typename T>
+inline void make_room(RecycledVector<T>& array, std::size_t size, std::size_t wanted) {
+    if (size > array.capacity()) [[unlikely]]
+        grow_room(array, size, wanted);
 }
 
 }  // namespace isomesh

@@ -260,6 +260,8 @@ class Refiner::Impl {
 
     // --- errors and queues
     ProjectionRequest candidate_request(std::uint32_t t) const;
+    /// candidate_request(t).direction alone.
+    glm::dvec3 candidate_direction(std::uint32_t t) const;
     /// Projects the base midpoints of `tris` that lack a current one (one batched projection).
     /// With `look_ahead`, the batch also projects the base midpoints of the leaves next in the
     /// split queue, kept aside for their own splits (projected_ahead).

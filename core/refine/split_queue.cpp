@@ -81,7 +81,11 @@ void BucketQueue::insert(std::uint32_t handle, double priority) {
     assert(handle < kNotQueued);
     if (handle >= links_.size()) {
         make_room(links_, std::size_t{handle} + 1, links_wanted_);
-        links_.resize(std::size_t{handle} + 1, Link{});
+        // Mostly a new slot, the next handle: one push rather than resize's general fill.
+        if (handle == links_.size())
+            links_.push_back(Link{});
+        else
+            links_.resize(std::size_t{handle} + 1, Link{});
         // Handles are slots, mostly new ones in increasing order: the line of the links a few
         // inserts ahead is asked for now.
         if (std::size_t{handle} + 16 < links_.capacity())
