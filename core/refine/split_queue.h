@@ -128,6 +128,7 @@ class BucketQueue final : public PriorityQueue {
     std::uint32_t mantissa_bits_;
     std::int64_t first_key_;  // the bucket key of 2^min_exponent
     mutable std::vector<List> heads_;
+    std::uint32_t last_bucket_ = 0;        // heads_.size() - 1
     std::vector<std::uint64_t> occupied_;  // one bit per bucket
     std::vector<std::uint64_t> summary_;   // one bit per word of occupied_
     RecycledVector<Link> links_;           // indexed by handle
