@@ -19,6 +19,7 @@
 // counts them); release_recycled_memory() gives them back to the system.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <memory>
 #include <new>
@@ -110,11 +111,31 @@ struct Reservation {
     std::size_t fallback;
 };
 
+/// Reserves `room` in `array`; returns room.wanted, for make_room.
 template <typename T>
-void reserve(RecycledVector<T>& array, Reservation room) {
+std::size_t reserve(RecycledVector<T>& array, Reservation room) {
     const std::size_t bytes = room.wanted * sizeof(T);
     const bool recycled = bytes >= kRecycledArrayBytes && recycled_block_kept(bytes);
     array.reserve(recycled ? room.wanted : room.fallback);
+    return room.wanted;
+}
+
+/// Room for `size` elements in `array` before it grows (a push or a resize): doubling as
+/// std::vector does, except that on the way past `wanted` (the room its Reservation wanted) it
+/// grows to exactly that. An array that started from the fallback room thus ends in a block of
+/// the wanted size, which the next refiner's same reservation takes (a kept block is taken only
+/// up to 5/4 of the array): doubled from the fallback it ended in a block up to twice as large,
+/// which no later reservation took, so every refiner grew its arrays again by copying.
+template <typename T>
+[[gnu::noinline]] void grow_room(RecycledVector<T>& array, std::size_t size, std::size_t wanted) {
+    std::size_t next = std::max(size, 2 * array.capacity());
+    if (size <= wanted && next > wanted) next = wanted;
+    array.reserve(next);
+}
+template <typename T>
+inline void make_room(RecycledVector<T>& array, std::size_t size, std::size_t wanted) {
+    if (size > array.capacity()) [[unlikely]]
+        grow_room(array, size, wanted);
 }
 
 }  // namespace isomesh

@@ -121,20 +121,18 @@ class DeltaBuilder {
 /// data of its last change; a triangle added and not removed since is in its slot.
 class SlotDeltaLog {
   public:
-    void add_vertex(std::uint32_t id, std::uint32_t slot) {
-        vertices_.push_back({id, slot, Change::Added});
-    }
+    void add_vertex(std::uint32_t id, std::uint32_t slot) { log_vertex({id, slot, Change::Added}); }
     void move_vertex(std::uint32_t id, std::uint32_t slot) {
-        vertices_.push_back({id, slot, Change::Moved});
+        log_vertex({id, slot, Change::Moved});
     }
-    void remove_vertex(std::uint32_t id) { vertices_.push_back({id, 0, Change::Removed}); }
+    void remove_vertex(std::uint32_t id) { log_vertex({id, 0, Change::Removed}); }
     void add_triangle(std::uint32_t id, std::uint32_t slot) {
-        triangles_.push_back({id, slot, Change::Added});
+        log_triangle({id, slot, Change::Added});
     }
-    void remove_triangle(std::uint32_t id) { triangles_.push_back({id, 0, Change::Removed}); }
+    void remove_triangle(std::uint32_t id) { log_triangle({id, 0, Change::Removed}); }
     void reserve(Reservation vertex_changes, Reservation triangle_changes) {
-        isomesh::reserve(vertices_, vertex_changes);
-        isomesh::reserve(triangles_, triangle_changes);
+        vertices_wanted_ = isomesh::reserve(vertices_, vertex_changes);
+        triangles_wanted_ = isomesh::reserve(triangles_, triangle_changes);
     }
     /// Forgets the changes logged so far.
     void clear() {
@@ -155,8 +153,19 @@ class SlotDeltaLog {
         Change change;
     };
 
+    void log_vertex(const Entry& e) {
+        make_room(vertices_, vertices_.size() + 1, vertices_wanted_);
+        vertices_.push_back(e);
+    }
+    void log_triangle(const Entry& e) {
+        make_room(triangles_, triangles_.size() + 1, triangles_wanted_);
+        triangles_.push_back(e);
+    }
+
     RecycledVector<Entry> vertices_;
     RecycledVector<Entry> triangles_;
+    std::size_t vertices_wanted_ = 0;  // the room reserved for (make_room)
+    std::size_t triangles_wanted_ = 0;
     IdRuns runs_;
 };
 

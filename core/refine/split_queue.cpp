@@ -43,6 +43,7 @@ BucketQueue::BucketQueue(QueueOrder order, BucketQueueSettings settings) : order
     const std::size_t count =
         static_cast<std::size_t>(settings.max_exponent - settings.min_exponent) * per_octave + 1;
     heads_.assign(count, List{});
+    last_bucket_ = static_cast<std::uint32_t>(count - 1);
     occupied_.assign((count + 63) / 64, 0);
     summary_.assign((occupied_.size() + 63) / 64, 0);
 }
@@ -60,9 +61,13 @@ inline std::uint32_t BucketQueue::bucket_index(double priority) const {
     // exponent followed by the leading mantissa bits, a piecewise linear approximation of log2.
     const auto key = static_cast<std::int64_t>(bits >> (kMantissaBits - mantissa_bits_));
     const std::int64_t bucket = key - first_key_ + 1;
-    const auto last = static_cast<std::int64_t>(heads_.size()) - 1;
+    const auto last = static_cast<std::int64_t>(last_bucket_);
     if (bucket < 1) return 0;
     return static_cast<std::uint32_t>(bucket > last ? last : bucket);
+}
+
+inline bool BucketQueue::better(double a, double b) const {
+    return order_ == QueueOrder::HighestFirst ? a > b : a < b;
 }
 
 inline void BucketQueue::set_occupied(std::uint32_t bucket, bool occupied) {
@@ -79,7 +84,18 @@ inline void BucketQueue::set_occupied(std::uint32_t bucket, bool occupied) {
 
 void BucketQueue::insert(std::uint32_t handle, double priority) {
     assert(handle < kNotQueued);
-    grow_to(links_, handle, Link{});
+    if (handle >= links_.size()) {
+        make_room(links_, std::size_t{handle} + 1, links_wanted_);
+        // Mostly a new slot, the next handle: one push rather than resize's general fill.
+        if (handle == links_.size())
+            links_.push_back(Link{});
+        else
+            links_.resize(std::size_t{handle} + 1, Link{});
+        // Handles are slots, mostly new ones in increasing order: the line of the links a few
+        // inserts ahead is asked for now.
+        if (std::size_t{handle} + 16 < links_.capacity())
+            __builtin_prefetch(links_.data() + handle + 16, 1);
+    }
     Link& link = links_[handle];
     assert(link.prev == kNotQueued && "insert: handle already queued");
     const std::uint32_t bucket = bucket_index(priority);
@@ -184,10 +200,6 @@ void BucketQueue::visit_in_order(const std::function<bool(std::uint32_t)>& visit
     for (std::uint32_t b = first_bucket(); b != kNone; b = next_bucket(b))
         for (std::uint32_t h = heads_[b].head; h != kNone; h = links_[h].next)
             if (visit(h)) return;
-}
-
-bool BucketQueue::better(double a, double b) const {
-    return order_ == QueueOrder::HighestFirst ? a > b : a < b;
 }
 
 double BucketQueue::extreme_priority() const {

@@ -92,7 +92,9 @@ class BucketQueue final : public PriorityQueue {
     void visit_in_order(const std::function<bool(std::uint32_t)>& visit) const override;
     double extreme_priority() const override;
     void clear() override;
-    void reserve(Reservation handles) override { isomesh::reserve(links_, handles); }
+    void reserve(Reservation handles) override {
+        links_wanted_ = isomesh::reserve(links_, handles);
+    }
 
     /// The bucket `priority` falls into (exposed for tests).
     std::uint32_t bucket_of(double priority) const;
@@ -126,9 +128,11 @@ class BucketQueue final : public PriorityQueue {
     std::uint32_t mantissa_bits_;
     std::int64_t first_key_;  // the bucket key of 2^min_exponent
     mutable std::vector<List> heads_;
+    std::uint32_t last_bucket_ = 0;        // heads_.size() - 1
     std::vector<std::uint64_t> occupied_;  // one bit per bucket
     std::vector<std::uint64_t> summary_;   // one bit per word of occupied_
     RecycledVector<Link> links_;           // indexed by handle
+    std::size_t links_wanted_ = 0;         // the room reserved for links_ (make_room)
     std::size_t size_ = 0;
 };
 

@@ -15,6 +15,11 @@ using namespace refiner_detail;
 // ---------------------------------------------------------------------------------------------
 // Errors and queues
 
+glm::dvec3 Refiner::Impl::candidate_direction(std::uint32_t t) const {
+    const Triangle& T = triangles_[t];
+    return vertices_[T.v[T.base]].normal + vertices_[T.v[(T.base + 1) % 3]].normal;
+}
+
 ProjectionRequest Refiner::Impl::candidate_request(std::uint32_t t) const {
     const Triangle& T = triangles_[t];
     const Vertex& a = vertices_[T.v[T.base]];
@@ -22,7 +27,7 @@ ProjectionRequest Refiner::Impl::candidate_request(std::uint32_t t) const {
     // Symmetric in a and b, so that both triangles of a diamond compute the same point.
     ProjectionRequest request;
     request.start = 0.5 * (a.position + b.position);
-    request.direction = a.normal + b.normal;
+    request.direction = a.normal + b.normal;  // candidate_direction
     request.slope = 0.5 * (a.gradient_norm + b.gradient_norm);
     request.scale = glm::length(b.position - a.position);
     request.fixed_axes = T.nb[T.base] == kNone ? face_axes(a.position, b.position, bounds_) : 0;
@@ -52,7 +57,7 @@ void Refiner::Impl::ensure_candidates(std::span<const std::uint32_t> tris, bool 
             continue;
         }
         if (AheadProjection* a = projected_ahead(t)) {
-            set_candidate(t, a->projection, candidate_request(t).direction);
+            set_candidate(t, a->projection, candidate_direction(t));
             a->slot = kNone;  // used
             continue;
         }

@@ -102,6 +102,47 @@ TEST_F(ArrayMemory, reservation_takes_the_whole_room_only_from_kept_blocks) {
     EXPECT_EQ(small.capacity(), 10u);
 }
 
+TEST_F(ArrayMemory, make_room_doubles_but_stops_once_at_the_wanted_room) {
+    RecycledVector<double> array;
+    reserve(array, Reservation(3000, 1000));
+    for (std::size_t size = 1; size <= 1000; ++size) make_room(array, size, 3000);
+    EXPECT_EQ(array.capacity(), 1000u);  // room enough: no growth
+    make_room(array, 1001, 3000);
+    EXPECT_EQ(array.capacity(), 2000u);  // doubling
+    make_room(array, 2001, 3000);
+    EXPECT_EQ(array.capacity(), 3000u);  // not 4000: the wanted room
+    make_room(array, 3001, 3000);
+    EXPECT_EQ(array.capacity(), 6000u);  // past it: doubling again
+    make_room(array, 7000, 3000);
+    EXPECT_EQ(array.capacity(), 12000u);
+}
+
+TEST_F(ArrayMemory, an_array_grown_from_its_fallback_leaves_a_block_the_same_reservation_takes) {
+    // 3 MB wanted, 0.8 MB reserved at first (a refiner that started small): grown element by
+    // element as the pools grow, the array ends in a block of the wanted size, which the next
+    // array with the same reservation gets whole (doubled from 0.8 MB it would have ended at
+    // 6.4 MB, over 5/4 of 3 MB, and never been taken).
+    const Reservation room(3 * kMiB / 8, 100'000);
+    const double* first = nullptr;
+    {
+        RecycledVector<double> array;
+        reserve(array, room);
+        EXPECT_EQ(array.capacity(), 100'000u);
+        for (std::size_t i = 0; i < room.wanted; ++i) {
+            make_room(array, array.size() + 1, room.wanted);
+            array.push_back(double(i));
+        }
+        EXPECT_EQ(array.capacity(), room.wanted);
+        first = array.data();
+    }
+    const RecycledMemory before = recycled_memory();
+    RecycledVector<double> next;
+    reserve(next, room);
+    EXPECT_EQ(next.capacity(), room.wanted);
+    EXPECT_EQ(next.data(), first);
+    EXPECT_EQ(recycled_memory().reused_blocks, before.reused_blocks + 1);
+}
+
 #if defined(__SANITIZE_ADDRESS__)
 TEST_F(ArrayMemory, a_kept_block_is_poisoned_under_address_sanitizer) {
     char* stale = nullptr;
