@@ -95,6 +95,21 @@ struct Partials {
     T da, db;
 };
 
+/// hypot's partial derivatives (a / r, b / r) at a point, 0 where r = 0 (the norm's kink, where
+/// 0 is in its generalised gradient, as abs's sgn(0) = 0).
+inline Partials<double> norm_partials(double a, double b, double r) {
+    if (r == 0.0) return {0.0, 0.0};
+    return {a / r, b / r};
+}
+
+/// Over a box: each the exact range of its coordinate of the unit vector (a, b) / r
+/// (interval_ranges::norm_direction), not [a] / [r], which counts a and r as unrelated.
+inline Partials<IntervalValue> norm_partials(const IntervalValue& a, const IntervalValue& b,
+                                             const IntervalValue&) {
+    return {{interval_ranges::norm_direction(a.value, b.value), false, false},
+            {interval_ranges::norm_direction(b.value, a.value), false, false}};
+}
+
 /// (d op(a, b) / da, d op(a, b) / db) for the arithmetic operations (not the choice operations
 /// min, max and logsumexp), from the operands and the result r = op(a, b).
 template <class T>
@@ -118,6 +133,8 @@ Partials<T> binary_partials(Op op, const T& a, const T& b, const T& r) {
             T norm = binary(Op::Add, unary(Op::Square, a), unary(Op::Square, b));
             return {div(b, norm), neg(div(a, norm))};
         }
+        case Op::Hypot:
+            return norm_partials(a, b, r);
         default:
             assert(!"min, max and logsumexp select or blend gradients instead");
             return {c(0.0), c(0.0)};

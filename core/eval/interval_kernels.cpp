@@ -133,6 +133,18 @@ ISOMESH_KERNEL Ends<D> pow_int_ends(const Ends<D>& a, unsigned n, const D& one) 
     return {pow_lanes(a.lo, n, one), pow_lanes(a.hi, n, one)};
 }
 
+/// std::sqrt in every lane (a vector has no square root of its own here).
+template <class D>
+ISOMESH_KERNEL D sqrt_lanes(const D& x) {
+    if constexpr (std::is_arithmetic_v<D>) {
+        return std::sqrt(x);
+    } else {
+        D r;
+        for (std::size_t l = 0; l < sizeof(D) / sizeof(double); ++l) r[l] = std::sqrt(x[l]);
+        return r;
+    }
+}
+
 /// A value's enclosures and flags over all lanes.
 template <class D, class M>
 struct Value {
@@ -223,6 +235,13 @@ ISOMESH_KERNEL Value<D, M> binary_value(const Ends<D>& a, const M& fa, const End
         return {{fold_min(a.lo, b.lo), fold_min(a.hi, b.hi)}, flags};
     } else if constexpr (op == Op::Max) {
         return {{fold_max(a.lo, b.lo), fold_max(a.hi, b.hi)}, flags};
+    } else if constexpr (op == Op::Hypot) {
+        // interval_ranges::hypot_range: euclidean_norm of the smallest and of the largest
+        // magnitudes, the same operations.
+        const Ends<D> ma = magnitude(a), mb = magnitude(b);
+        return {
+            {sqrt_lanes(ma.lo * ma.lo + mb.lo * mb.lo), sqrt_lanes(ma.hi * ma.hi + mb.hi * mb.hi)},
+            flags};
     } else {
         LaneResults<W> r;
         for (std::size_t l = 0; l < W; ++l)
@@ -623,6 +642,17 @@ struct GradientStep {
                 const Ends<D> q = div(r.ends, b);
                 db = {-q.hi, -q.lo};
                 special |= as_mask<M>(holds_zero(b));
+            } else if constexpr (op == Op::Hypot) {
+                // forward_mode::norm_partials: norm_direction itself, lane by lane.
+                double pa_lo[V], pa_hi[V], pb_lo[V], pb_hi[V];
+                for (std::size_t l = 0; l < V; ++l) {
+                    const Interval x{lane(a.lo, l), lane(a.hi, l)}, y{lane(b.lo, l), lane(b.hi, l)};
+                    const Interval u = interval_ranges::norm_direction(x, y);
+                    const Interval v = interval_ranges::norm_direction(y, x);
+                    pa_lo[l] = u.lo, pa_hi[l] = u.hi, pb_lo[l] = v.lo, pb_hi[l] = v.hi;
+                }
+                da = {load<D>(pa_lo), load<D>(pa_hi)};
+                db = {load<D>(pb_lo), load<D>(pb_hi)};
             } else {
                 LaneResults<V> pa, pb;
                 for (std::size_t l = 0; l < V; ++l) {

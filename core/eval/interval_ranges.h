@@ -300,6 +300,44 @@ inline Interval log_sum_exp_weight(const Interval& a, const Interval& b) {
     return clamp({lo - kLibmSlack, hi + kLibmSlack}, 0.0, 1.0);
 }
 
+/// hypot: increasing in |a| and in |b|, so its range is spanned by the values at the smallest
+/// and at the largest magnitudes (the distance from the origin to the box of (a, b), and to its
+/// farthest corner). Its + * sqrt are correctly rounded, so monotone: no widening.
+inline Interval hypot_range(const Interval& a, const Interval& b) {
+    const Interval ma = magnitude(a), mb = magnitude(b);
+    return {euclidean_norm(ma.lo, mb.lo), euclidean_norm(ma.hi, mb.hi)};
+}
+
+/// Below this, hypot's squares may be subnormal somewhere on the box, where they round with a
+/// large relative error: the point's a / r then strays from u (by at most a factor 1.23 when the
+/// sum of squares rounds to a nonzero subnormal, and r = 0 gives 0).
+constexpr double kSmallestNormalNorm = 1e-150;
+constexpr double kSubnormalDirection = 1.25;
+
+/// The range of u = a / hypot(a, b), the first coordinate of the unit vector along (a, b), over
+/// the box a x b: hypot's partial derivative in a (by symmetry, direction(b, a) is the one in b).
+/// u is increasing in a (du/da = b^2 / r^3) and, for fixed a, moves away from 0 as |b| shrinks,
+/// so its maximum is at a = a.hi with |b| smallest if a.hi >= 0 (largest otherwise), and its
+/// minimum at a = a.lo with |b| largest if a.lo >= 0 (smallest otherwise). Widened for the
+/// rounding of the point's a / r, which is within a few ulps of u and never beyond [-1, 1] where
+/// r is a normal number. Where r may be 0 (the box holds the origin, the norm's kink) or tiny,
+/// the point's partial is 0 or a / r of a's sign: [-1, 1] (the generalised gradient at the
+/// kink, as abs's [-1, 1] at 0) cut to a's sign, widened for subnormal rounding. Where r may
+/// overflow, the point's a / inf is 0 or NaN: a's sign again.
+inline Interval norm_direction(const Interval& a, const Interval& b) {
+    if (a.is_empty() || b.is_empty()) return {-kSubnormalDirection, kSubnormalDirection};
+    const Interval r = hypot_range(a, b);
+    if (!(r.lo >= kSmallestNormalNorm) || !(r.hi < kInf)) {
+        return {a.lo < 0.0 ? -kSubnormalDirection : 0.0, a.hi > 0.0 ? kSubnormalDirection : 0.0};
+    }
+    const Interval mb = magnitude(b);
+    const double b_for_hi = a.hi >= 0.0 ? mb.lo : mb.hi;
+    const double b_for_lo = a.lo >= 0.0 ? mb.hi : mb.lo;
+    const double hi = a.hi / euclidean_norm(a.hi, b_for_hi);
+    const double lo = a.lo / euclidean_norm(a.lo, b_for_lo);
+    return clamp(widen({lo, hi}, Zero::Underflow), -1.0, 1.0);
+}
+
 [[gnu::always_inline]] inline Interval unary_range(Op op, const Interval& a, double imm,
                                                    Effects& e) {
     switch (op) {
@@ -368,6 +406,8 @@ inline Interval log_sum_exp_weight(const Interval& a, const Interval& b) {
             return {std::max(a.lo, b.lo), std::max(a.hi, b.hi)};
         case Op::LogSumExp:
             return log_sum_exp_range(a, b);
+        case Op::Hypot:
+            return hypot_range(a, b);
         default:
             assert(!"not a binary operation");
             return Interval::entire();

@@ -158,6 +158,13 @@ struct PointStep {
             // apply_binary: NaN as a + b when either operand is NaN, else a < b ? a : b.
             const D chosen = op == Op::Min ? (a < b ? a : b) : (a > b ? a : b);
             r = mask_of(a != a) | mask_of(b != b) ? a + b : chosen;
+        } else if constexpr (op == Op::Hypot) {
+            // forward_mode::norm_partials: a / r and b / r, 0 where r = 0.
+            r = each_lane<V, D>(
+                [&](std::size_t l) { return euclidean_norm(lane(a, l), lane(b, l)); });
+            const auto kink = r == D{};
+            da = kink ? D{} : a / r;
+            db = kink ? D{} : b / r;
         } else if constexpr (op == Op::LogSumExp) {
             // forward_mode::step: an operand's gradient beyond the cutoff (pick), else the weights
             // (forward_mode::blend) as partial derivatives.

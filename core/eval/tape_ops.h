@@ -8,7 +8,7 @@
 namespace isomesh {
 
 static_assert(Op::Param < Op::Neg && Op::Tanh < Op::Add &&
-                  Op::LogSumExp == static_cast<Op>(kOpCount - 1),
+                  Op::Hypot == static_cast<Op>(kOpCount - 1),
               "enum Op must list leaves, then unary, then binary operations");
 
 constexpr bool is_leaf(Op op) {
@@ -33,7 +33,8 @@ constexpr bool is_choice(Op op) {
     X(Square)                                                                               \
     X(PowInt) X(Sqrt) X(Cbrt) X(Abs) X(Sgn) X(Floor) X(Ceil) X(Round) X(Exp) X(Ln) X(Log10) \
         X(Log2) X(Sin) X(Cos) X(Tan) X(Asin) X(Acos) X(Atan) X(Sinh) X(Cosh) X(Tanh)
-#define ISOMESH_BINARY_OPS(X) X(Add) X(Sub) X(Mul) X(Div) X(Pow) X(Atan2) X(Min) X(Max) X(LogSumExp)
+#define ISOMESH_BINARY_OPS(X) X(Add) X(Sub) X(Mul) X(Div) X(Pow) X(Atan2) X(Min) X(Max) X(LogSumExp) \
+    X(Hypot)
 #define ISOMESH_COUNT(name) +1
 static_assert(5 ISOMESH_UNARY_OPS(ISOMESH_COUNT) ISOMESH_BINARY_OPS(ISOMESH_COUNT) == kOpCount,
               "the lists must name every operation");

@@ -43,8 +43,8 @@ std::vector<Word> split_words(std::string_view line) {
 }
 
 /// The tape operation named `name` taking `operands` operands (our op names, plus Fidget's
-/// two-operand `atan`), or false. powi and logsumexp are the compiler's own operations, not
-/// opcodes of the format.
+/// two-operand `atan`), or false. powi, logsumexp and hypot are the compiler's own operations,
+/// not opcodes of the format.
 bool find_operation(std::string_view name, std::size_t operands, Op& op) {
     if (name == "atan" && operands == 2) {
         op = Op::Atan2;
@@ -52,7 +52,8 @@ bool find_operation(std::string_view name, std::size_t operands, Op& op) {
     }
     for (int k = static_cast<int>(Op::Neg); k < kOpCount; ++k) {
         auto candidate = static_cast<Op>(k);
-        if (candidate != Op::PowInt && candidate != Op::LogSumExp && op_name(candidate) == name) {
+        if (candidate != Op::PowInt && candidate != Op::LogSumExp && candidate != Op::Hypot &&
+            op_name(candidate) == name) {
             op = candidate;
             return true;
         }

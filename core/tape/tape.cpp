@@ -31,7 +31,7 @@ constexpr std::array<OpInfo, kOpCount> kOpInfo = {{
     {"atan", 1, false},  {"sinh", 1, false},  {"cosh", 1, false},   {"tanh", 1, false},
     {"add", 2, true},    {"sub", 2, false},   {"mul", 2, true},     {"div", 2, false},
     {"pow", 2, false},   {"atan2", 2, false}, {"min", 2, true},     {"max", 2, true},
-    {"logsumexp", 2, true},
+    {"logsumexp", 2, true}, {"hypot", 2, true},
 }};
 
 const OpInfo& info(Op op) { return kOpInfo[static_cast<std::size_t>(op)]; }
@@ -129,20 +129,33 @@ std::uint32_t TapeBuilder::unary(Op op, std::uint32_t a) {
     if (op == Op::Ln) {
         if (auto fused = log_of_exponential_sum(a)) return *fused;
     }
+    if (op == Op::Sqrt) {
+        if (auto fused = norm_of_square_sum(a)) return *fused;
+    }
     return emit({op, a, 0, 0.0});
+}
+
+std::vector<std::uint32_t> TapeBuilder::sum_terms(std::uint32_t sum) const {
+    std::vector<std::uint32_t> terms, pending{sum};  // an explicit stack: sums may nest deeply
+    while (!pending.empty()) {
+        const std::uint32_t slot = pending.back();
+        pending.pop_back();
+        if (code_[slot].op == Op::Add) {
+            pending.push_back(code_[slot].b);
+            pending.push_back(code_[slot].a);
+        } else {
+            terms.push_back(slot);
+        }
+    }
+    return terms;
 }
 
 std::optional<std::uint32_t> TapeBuilder::log_of_exponential_sum(std::uint32_t sum) {
     if (code_[sum].op != Op::Add) return std::nullopt;
-    // The terms of the sum, left to right (an explicit stack: sums may nest deeply).
-    std::vector<std::uint32_t> exponents, pending{sum};
-    while (!pending.empty()) {
-        const Instruction term = code_[pending.back()];
-        pending.pop_back();
-        if (term.op == Op::Add) {
-            pending.push_back(term.b);
-            pending.push_back(term.a);
-        } else if (term.op == Op::Exp) {
+    std::vector<std::uint32_t> exponents;
+    for (std::uint32_t slot : sum_terms(sum)) {
+        const Instruction term = code_[slot];
+        if (term.op == Op::Exp) {
             exponents.push_back(term.a);
         } else if (term.op == Op::Const && term.imm > 0.0 && std::isfinite(term.imm)) {
             exponents.push_back(constant(std::log(term.imm)));
@@ -153,6 +166,17 @@ std::optional<std::uint32_t> TapeBuilder::log_of_exponential_sum(std::uint32_t s
     std::uint32_t result = exponents[0];
     for (std::size_t i = 1; i < exponents.size(); ++i)
         result = binary(Op::LogSumExp, result, exponents[i]);
+    return result;
+}
+
+std::optional<std::uint32_t> TapeBuilder::norm_of_square_sum(std::uint32_t sum) {
+    if (code_[sum].op != Op::Add) return std::nullopt;
+    const std::vector<std::uint32_t> terms = sum_terms(sum);
+    for (std::uint32_t slot : terms)
+        if (code_[slot].op != Op::Square) return std::nullopt;
+    std::uint32_t result = code_[terms[0]].a;
+    for (std::size_t i = 1; i < terms.size(); ++i)
+        result = binary(Op::Hypot, result, code_[terms[i]].a);
     return result;
 }
 

@@ -64,15 +64,21 @@ enum class Op : std::uint8_t {
     // TapeBuilder fuses the spelled-out form into it (see TapeBuilder::unary), so that every
     // evaluator sees one operation whose enclosures are tight (eval/interval_ranges.h).
     LogSumExp,
+    // sqrt(a^2 + b^2), the Euclidean norm of (a, b). Not an opcode of the languages either:
+    // TapeBuilder fuses sqrt of a sum of two or more squares into it (nested for more terms,
+    // hypot(hypot(a, b), c)), so that every evaluator sees one operation whose value and gradient
+    // enclosures are tight (the spelled-out a / sqrt(a^2 + b^2) counts a and the root as
+    // unrelated: the dependency problem, worst on the distance terms of CAD models).
+    Hypot,
 };
 
-inline constexpr int kOpCount = static_cast<int>(Op::LogSumExp) + 1;
+inline constexpr int kOpCount = static_cast<int>(Op::Hypot) + 1;
 
 /// Number of operands of `op`: 0 for leaves, 1 for unary, 2 for binary operations.
 int op_arity(Op op);
 /// A stable lower-case name for `op` (as used in dumps and the .vm format where one exists).
 std::string_view op_name(Op op);
-/// True for operations whose operands may be swapped (add, mul, min, max, logsumexp).
+/// True for operations whose operands may be swapped (add, mul, min, max, logsumexp, hypot).
 bool op_commutes(Op op);
 
 struct Instruction {
@@ -108,7 +114,9 @@ struct Tape {
 /// function: ln(exp(a) + exp(b) + ...) (a sum of two or more exponentials, or of exponentials and
 /// positive constants c = exp(ln c)) becomes logsumexp(logsumexp(a, b), ...), which agrees with it
 /// within a few rounding errors where no exp overflows or underflows, and stays finite where one
-/// does.
+/// does. Likewise sqrt(a^2 + b^2 + ...) (a sum of two or more squares) becomes
+/// hypot(hypot(a, b), ...), which computes sqrt(sqrt(a^2 + b^2)^2 + c^2): the same value within
+/// a few rounding errors, with the same overflow and underflow.
 class TapeBuilder {
 public:
     std::uint32_t constant(double value);
@@ -145,6 +153,11 @@ private:
     /// logsumexp of the exponents when `sum` is a sum of two or more exponentials and positive
     /// constants (ln(sum) then), else nothing.
     std::optional<std::uint32_t> log_of_exponential_sum(std::uint32_t sum);
+    /// hypot of the bases when `sum` is a sum of two or more squares (sqrt(sum) then), else
+    /// nothing.
+    std::optional<std::uint32_t> norm_of_square_sum(std::uint32_t sum);
+    /// The terms of the sum `sum` (nested adds), left to right.
+    std::vector<std::uint32_t> sum_terms(std::uint32_t sum) const;
 
     std::vector<Instruction> code_;
     std::vector<std::string> params_;

@@ -160,6 +160,20 @@ TEST(CompileExpression, functions_match_std_math) {
     for (const auto& [source, reference] : cases) expect_values(source, reference);
 }
 
+// sqrt of a sum of squares (distances) compiles to hypot, one per extra term, with the values of
+// the spelled-out root within rounding.
+TEST(CompileExpression, square_roots_of_sums_of_squares_fuse_to_hypot) {
+    const Tape distance = compiled("sqrt((x-1)^2 + y^2 + (z+0.5)*(z+0.5))");
+    EXPECT_EQ(count_ops(distance, Op::Hypot), 2);
+    EXPECT_EQ(count_ops(distance, Op::Sqrt) + count_ops(distance, Op::Square), 0);
+    EXPECT_EQ(count_ops(compiled("sqrt(x^2 + y^2)"), Op::Hypot), 1);
+    EXPECT_EQ(count_ops(compiled("sqrt(x^2 + y)"), Op::Hypot), 0);
+    EXPECT_EQ(count_ops(compiled("sqrt(x^2 - y^2)"), Op::Hypot), 0);
+    expect_values("sqrt((x-1)^2 + y^2 + (z+0.5)*(z+0.5))", [](double x, double y, double z) {
+        return std::sqrt((x - 1) * (x - 1) + y * y + (z + 0.5) * (z + 0.5));
+    });
+}
+
 // ln of a sum of exponentials (smooth CSG blends) compiles to logsumexp, one per extra term, with
 // positive constants as exponentials of their logarithm: the same values, and finite where an
 // exponential overflows.

@@ -91,15 +91,19 @@ double run_vm_text(const std::string& text, double x, double y, double z) {
     return last;
 }
 
-// bear's smooth blends, ln(exp(-k a) + exp(-k b)) written out in the file, load as logsumexp, and
-// the model's values stay those of the file run line by line, within a few rounding errors of the
-// unit scale (values near the surface are near 0: relative errors mean nothing there).
-TEST(ReadVm, bear_blends_load_as_logsumexp_with_the_same_values) {
+// bear's smooth blends, ln(exp(-k a) + exp(-k b)) written out in the file, load as logsumexp, its
+// distances as hypot, and the model's values stay those of the file run line by line, within a few
+// rounding errors of the unit scale (values near the surface are near 0: relative errors mean
+// nothing there).
+TEST(ReadVm, bear_blends_and_distances_load_fused_with_the_same_values) {
     ISOMESH_SKIP_WITHOUT_SHARED_DATA();
     const std::string text = read_model("bear.vm");
     Tape tape = read_model_tape("bear.vm");
     EXPECT_EQ(testing::count_ops(tape, Op::LogSumExp), 8);
     EXPECT_EQ(testing::count_ops(tape, Op::Ln), 0);
+    // Its 23 distances sqrt(a^2 + b^2 + c^2) load as two hypots each.
+    EXPECT_EQ(testing::count_ops(tape, Op::Hypot), 46);
+    EXPECT_EQ(testing::count_ops(tape, Op::Sqrt), 0);
     std::mt19937 random(9);
     std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
     double worst = 0.0;
