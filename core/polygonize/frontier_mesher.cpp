@@ -104,16 +104,10 @@ void evaluate_corners(EvaluatorPool& workers, const Lattice& lattice,
 /// Locates the crossing of every edge of `leaves` whose ends are on different sides and that is
 /// not in `crossings` yet (crossing_vertices.h), on steps of `finest_depth`, adding the values it
 /// evaluates to `values`.
-void locate_crossings(EvaluatorPool& workers, const Lattice& lattice,
-                      const std::vector<CellId>& leaves, int finest_depth, ValueMap& values,
-                      IdMap<CrossingKey>& crossings, const WorkBudget& budget) {
-    struct Edge {
-        std::uint64_t key;
-        glm::u32vec3 lower;
-        int axis;
-        int depth;
-    };
-    std::vector<Edge> edges;
+void locate_leaf_crossings(EvaluatorPool& workers, const Lattice& lattice,
+                           const std::vector<CellId>& leaves, int finest_depth, ValueMap& values,
+                           IdMap<CrossingKey>& crossings, const WorkBudget& budget) {
+    std::vector<std::pair<std::uint64_t, CellEdge>> edges;  // by cell_edge_key
     for (const CellId& cell : leaves) {
         for (int e = 0; e < 12; ++e) {
             const auto [c0, c1] = kEdgeCorners[e];
@@ -123,28 +117,31 @@ void locate_crossings(EvaluatorPool& workers, const Lattice& lattice,
                 continue;
             }
             const std::uint64_t key = cell_edge_key(p0, e / 4, cell.depth);
-            if (!crossings.contains(key)) edges.push_back({key, p0, e / 4, cell.depth});
+            if (!crossings.contains(key)) edges.push_back({key, {p0, e / 4, cell.depth}});
         }
     }
-    std::sort(edges.begin(), edges.end(),
-              [](const Edge& a, const Edge& b) { return a.key < b.key; });
+    const auto by_key = [](const auto& a, const auto& b) { return a.first < b.first; };
+    std::sort(edges.begin(), edges.end(), by_key);
     edges.erase(std::unique(edges.begin(), edges.end(),
-                            [](const Edge& a, const Edge& b) { return a.key == b.key; }),
+                            [](const auto& a, const auto& b) { return a.first == b.first; }),
                 edges.end());
+    std::vector<CellEdge> cell_edges;
+    cell_edges.reserve(edges.size());
+    for (const auto& [key, edge] : edges) cell_edges.push_back(edge);
     std::vector<CrossingKey> located(edges.size());
     std::vector<ValueMap> evaluated(task_count(edges.size(), kEdgesPerTask));
     workers.for_each(evaluated.size(), [&](std::size_t task, CountingEvaluator& evaluator) {
+        if (budget.cancelled()) return;
         CornerCache cache(evaluator, lattice, &values);
-        const std::size_t end = std::min(edges.size(), (task + 1) * kEdgesPerTask);
-        for (std::size_t i = task * kEdgesPerTask; i < end && !budget.cancelled(); ++i) {
-            located[i] = locate_crossing(cache, lattice, edges[i].lower, edges[i].axis,
-                                         edges[i].depth, finest_depth);
-        }
+        const std::size_t begin = task * kEdgesPerTask;
+        const std::size_t n = std::min(edges.size() - begin, kEdgesPerTask);
+        locate_crossings(cache, lattice, std::span(cell_edges).subspan(begin, n), finest_depth,
+                         std::span(located).subspan(begin, n));
         evaluated[task] = std::move(cache.values());
     });
     if (budget.cancelled()) return;
     for (ValueMap& part : evaluated) values.merge(part);
-    for (std::size_t i = 0; i < edges.size(); ++i) crossings.emplace(edges[i].key, located[i]);
+    for (std::size_t i = 0; i < edges.size(); ++i) crossings.emplace(edges[i].first, located[i]);
 }
 
 /// Replaces each cell of `which` (a subsequence of `frontier`'s cells) by its subtree, keeping
@@ -495,7 +492,7 @@ class FrontierMesher::Impl {
         const std::size_t n = std::min(kChunk, unlocated_.size());
         const std::vector<CellId> chunk(unlocated_.end() - static_cast<std::ptrdiff_t>(n),
                                         unlocated_.end());
-        locate_crossings(workers_, lattice_, chunk, finest_, values_, crossings_, *budget_);
+        locate_leaf_crossings(workers_, lattice_, chunk, finest_, values_, crossings_, *budget_);
         if (budget_->cancelled()) return false;
         unlocated_.resize(unlocated_.size() - n);
         if (unlocated_.empty()) begin_selection(Stage::mesh, &LeafState::stale);
