@@ -30,6 +30,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "polygonize/ancestor_path.h"
+
 namespace isomesh {
 namespace {
 
@@ -71,9 +73,9 @@ class CellClassifier {
         : evaluator_(evaluator),
           lattice_(lattice),
           settings_(settings),
-          corners_(evaluator, lattice, known) {}
+          corners_(evaluator, lattice, known),
+          path_(evaluator, lattice) {}
 
-    ~CellClassifier() { walk_to_depth(0); }
     CellClassifier(const CellClassifier&) = delete;
     CellClassifier& operator=(const CellClassifier&) = delete;
 
@@ -86,7 +88,7 @@ class CellClassifier {
             if (budget.exhausted()) break;
             std::size_t end = done + 1;
             while (end < cells.size() && cells[end].parent() == cells[done].parent()) ++end;
-            if (cells[done].depth > 0) walk_to(cells[done].parent());
+            if (cells[done].depth > 0) path_.walk_to(cells[done].parent());
             const std::size_t classified =
                 classify_siblings(cells.subspan(done, end - done), out.subspan(done, end - done),
                                   [&budget] { return budget.exhausted(); });
@@ -226,34 +228,12 @@ class CellClassifier {
         return true;
     }
 
-    /// Specialises the evaluator to `cell` and its ancestors (tape simplification), reusing the
-    /// specialisations of the ancestors it shares with the previous cell.
-    void walk_to(const CellId& cell) {
-        std::size_t common = 0;
-        while (common < path_.size() && common <= static_cast<std::size_t>(cell.depth) &&
-               path_[common] == cell.ancestor(static_cast<int>(common)))
-            ++common;
-        walk_to_depth(common);
-        for (int level = static_cast<int>(path_.size()); level <= cell.depth; ++level) {
-            const CellId ancestor = cell.ancestor(level);
-            evaluator_.push(lattice_.cell_box(ancestor));
-            path_.push_back(ancestor);
-        }
-    }
-
-    void walk_to_depth(std::size_t depth) {
-        while (path_.size() > depth) {
-            evaluator_.pop();
-            path_.pop_back();
-        }
-    }
-
     Evaluator& evaluator_;
     const Lattice& lattice_;
     const OctreeSettings& settings_;
     CornerCache corners_;
-    EdgeRootCounts edges_;      // of the siblings being classified (classify_siblings)
-    std::vector<CellId> path_;  // path_[k]: the pushed ancestor at depth k
+    EdgeRootCounts edges_;  // of the siblings being classified (classify_siblings)
+    AncestorPath path_;     // to the parent of the siblings being classified
     std::vector<Box> boxes_;
     std::vector<glm::u32vec3> points_;
     std::vector<IntervalValue> values_;
