@@ -404,7 +404,7 @@ class FrontierMesher::Impl {
             case Stage::corners:
                 return evaluate_fresh_corners();
             case Stage::grade:
-                return select_chunk(&LeafState::grade, [this](std::size_t i, CountingEvaluator&) {
+                return select_chunk(&LeafState::grade, [this](std::size_t i) {
                     return needs_grading(input(), leaves_[i]);
                 });
             case Stage::split:
@@ -413,10 +413,11 @@ class FrontierMesher::Impl {
             case Stage::locate:
                 return locate_chunk();
             case Stage::mesh:
-                return select_chunk(&LeafState::stale,
-                                    [this](std::size_t i, CountingEvaluator& evaluator) {
-                                        return !mesh_stale_leaf(i, evaluator);
-                                    });
+                return select_chunk(
+                    &LeafState::stale,
+                    [this](std::size_t i, CountingEvaluator& evaluator, AncestorPath& path) {
+                        return !mesh_stale_leaf(i, evaluator, path);
+                    });
             case Stage::roots:
                 return roots_chunk();
             case Stage::assemble:
@@ -546,10 +547,10 @@ class FrontierMesher::Impl {
     }
 
     /// Meshes stale leaf i; false when it did not match.
-    bool mesh_stale_leaf(std::size_t i, CountingEvaluator& evaluator) {
+    bool mesh_stale_leaf(std::size_t i, CountingEvaluator& evaluator, AncestorPath& path) {
         LeafState& state = states_[i];
         LeafMeshes mesh;
-        mesh_leaf(evaluator, input(), leaves_[i], mesh);
+        mesh_leaf(evaluator, input(), leaves_[i], mesh, &path);
         const bool matched = mesh.unmatched.empty();
         state.mesh = mesh.triangles.empty() && mesh.extra_positions.empty()
                          ? nullptr
@@ -567,7 +568,8 @@ class FrontierMesher::Impl {
     }
 
     /// Those of `candidates` (leaf indices, in order) for which `predicate` holds, evaluated in
-    /// parallel (the predicate may take the task's evaluator), in order.
+    /// parallel (the predicate may take the task's evaluator and a walk of it along the task's
+    /// leaves, which are in octree order), in order.
     template <typename Predicate>
     std::vector<std::size_t> select(const std::vector<std::size_t>& candidates,
                                     const Predicate& predicate) {
@@ -576,11 +578,12 @@ class FrontierMesher::Impl {
             task_count(candidates.size(), kCellsPerTask),
             [&](std::size_t task, CountingEvaluator& evaluator) {
                 const std::size_t end = std::min(candidates.size(), (task + 1) * kCellsPerTask);
+                AncestorPath path(evaluator, lattice_);
                 for (std::size_t k = task * kCellsPerTask; k < end && !budget_->cancelled(); ++k) {
                     if constexpr (std::is_invocable_v<Predicate, std::size_t>) {
                         chosen[k] = predicate(candidates[k]);
                     } else {
-                        chosen[k] = predicate(candidates[k], evaluator);
+                        chosen[k] = predicate(candidates[k], evaluator, path);
                     }
                 }
             });
