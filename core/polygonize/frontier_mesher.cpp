@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <iterator>
 #include <memory>
 #include <optional>
 #include <utility>
@@ -145,55 +146,39 @@ void locate_leaf_crossings(EvaluatorPool& workers, const Lattice& lattice,
     for (std::size_t i = 0; i < edges.size(); ++i) crossings.emplace(edges[i].first, located[i]);
 }
 
-/// Replaces each cell of `which` (a subsequence of `frontier`'s cells) by its subtree, keeping
-/// the octree order: a pending cell by its 8 children, pending too; a settled cell by the leaves
-/// of its classified subtree (split_settled), or, in a mesh of an unfinished octree (`preview`),
-/// by its 8 children as pending cells too (classifying a subtree there could cost more than the
-/// whole octree so far). The new cells are appended to `added`. Once the budget is exhausted, no
-/// cell but the first starts: `split_count` says how many of `which`, from the first on, were
+/// The subtrees replacing cells `which` (in octree order): a pending cell's 8 children, pending
+/// too; a settled cell's leaves of its classified subtree (split_settled), or, in a mesh of an
+/// unfinished octree (`preview`), its 8 children as pending cells too (classifying a subtree there
+/// could cost more than the whole octree so far). Once the budget is exhausted, no cell but the
+/// first starts: the result holds the subtrees of as many of `which`, from the first on, as were
 /// split (the others are left as they were, for the next call).
-std::vector<FrontierCell> split_cells(EvaluatorPool& workers, const Lattice& lattice,
-                                      const OctreeSettings& settings,
-                                      const std::vector<FrontierCell>& frontier,
-                                      const std::vector<CellId>& which, bool preview,
-                                      ValueMap& values, std::vector<CellId>& added,
-                                      const WorkBudget& budget, std::size_t& split_count) {
+std::vector<std::vector<FrontierCell>> split_cells(EvaluatorPool& workers, const Lattice& lattice,
+                                                   const OctreeSettings& settings,
+                                                   std::span<const FrontierCell> which,
+                                                   bool preview, ValueMap& values,
+                                                   const WorkBudget& budget) {
     std::vector<std::vector<FrontierCell>> subtrees(which.size());
     std::vector<ValueMap> evaluated(which.size());
     std::vector<std::uint8_t> done(which.size(), 0);
-    std::size_t next = 0;
-    std::vector<CellState> states(which.size());
-    for (const FrontierCell& f : frontier) {
-        if (next < which.size() && f.cell == which[next]) states[next++] = f.state;
-    }
     workers.for_each(which.size(), [&](std::size_t i, CountingEvaluator& evaluator) {
         if (budget.cancelled() || (i > 0 && budget.exhausted())) return;
-        if (states[i] == CellState::Pending || preview) {
+        const CellId& cell = which[i].cell;
+        if (which[i].state == CellState::Pending || preview) {
             for (int octant = 0; octant < 8; ++octant)
-                subtrees[i].push_back({which[i].child(octant), CellState::Pending});
+                subtrees[i].push_back({cell.child(octant), CellState::Pending});
         } else {
             subtrees[i] =
-                split_settled(evaluator, lattice, settings, which[i], values, evaluated[i], budget);
+                split_settled(evaluator, lattice, settings, cell, values, evaluated[i], budget);
         }
         done[i] = 1;
     });
     // The cells split in a row from the first (tasks run in any order): the same frontier
     // whatever the threads' timing.
-    split_count = static_cast<std::size_t>(std::find(done.begin(), done.end(), 0) - done.begin());
-    std::vector<FrontierCell> result;
-    next = 0;
-    for (const FrontierCell& f : frontier) {
-        if (next < split_count && f.cell == which[next]) {
-            const std::vector<FrontierCell>& subtree = subtrees[next];
-            result.insert(result.end(), subtree.begin(), subtree.end());
-            for (const FrontierCell& s : subtree) added.push_back(s.cell);
-            values.merge(evaluated[next]);
-            ++next;
-        } else {
-            result.push_back(f);
-        }
-    }
-    return result;
+    const auto count =
+        static_cast<std::size_t>(std::find(done.begin(), done.end(), 0) - done.begin());
+    subtrees.resize(count);
+    for (std::size_t i = 0; i < count; ++i) values.merge(evaluated[i]);
+    return subtrees;
 }
 
 /// The surface's vertices on lattice edges: roots on the finest steps of the crossings used.
@@ -597,19 +582,29 @@ class FrontierMesher::Impl {
     /// Splits the leaves `cells` (in order), or as many of them from the first on as the budget
     /// allows (returned), keeping the index, the leaves' states and the crossings up to date.
     std::size_t split(const std::vector<CellId>& cells) {
+        std::vector<FrontierCell> which;
+        std::vector<std::size_t> at;  // their indices in leaves_
+        for (const CellId& cell : cells) {
+            at.push_back(position(cell));
+            which.push_back(frontier_[at.back()]);
+        }
+        const std::vector<std::vector<FrontierCell>> subtrees =
+            split_cells(workers_, lattice_, settings_, which, preview_, values_, *budget_);
+        const std::size_t count = subtrees.size();
         const std::size_t before = fresh_.size();
-        std::size_t count = 0;
-        frontier_ = split_cells(workers_, lattice_, settings_, frontier_, cells, preview_, values_,
-                                fresh_, *budget_, count);
-        std::vector<CellId> old_leaves = std::exchange(leaves_, cells_of(frontier_));
-        carry_states(old_leaves);
+        for (const std::vector<FrontierCell>& subtree : subtrees) {
+            for (const FrontierCell& f : subtree) fresh_.push_back(f.cell);
+        }
+        replace_leaves(std::span(at).first(count), subtrees);
         for (const CellId& cell : std::span(cells).first(count)) {
             for (const CellId& n : index_->face_neighbours(cell)) {
                 LeafState& state = states_[position(n)];
                 state.grade = state.stale = true;
             }
         }
-        const int finest = deepest(frontier_);
+        int finest = finest_;
+        for (std::size_t i = before; i < fresh_.size(); ++i)
+            finest = std::max(finest, fresh_[i].depth);
         if (finest != finest_) {
             // Crossings are named by steps of the finest leaf: all are located again.
             finest_ = finest;
@@ -622,27 +617,44 @@ class FrontierMesher::Impl {
         return count;
     }
 
-    /// Moves the states of the leaves kept from `old_leaves` to their places in leaves_; the
-    /// leaves that replaced a split one start fresh, and the index learns of them. (Both lists
-    /// are in octree order, a split cell's leaves where it was.)
-    void carry_states(const std::vector<CellId>& old_leaves) {
-        std::vector<LeafState> states(leaves_.size());
-        std::size_t j = 0;
-        for (std::size_t i = 0; i < old_leaves.size(); ++i) {
-            const CellId& old = old_leaves[i];
-            if (j < leaves_.size() && leaves_[j] == old) {
-                states[j++] = std::move(states_[i]);
-                continue;
+    /// Replaces leaves at[i] (ascending) by subtrees[i] in the frontier, the leaves and their
+    /// states (the new leaves start fresh, and the index learns of them), in one pass that keeps
+    /// the octree order; the old arrays become the next call's scratch space.
+    void replace_leaves(std::span<const std::size_t> at,
+                        const std::vector<std::vector<FrontierCell>>& subtrees) {
+        std::size_t size = frontier_.size() - at.size();
+        for (const std::vector<FrontierCell>& subtree : subtrees) size += subtree.size();
+        next_frontier_.clear();
+        next_leaves_.clear();
+        next_states_.clear();
+        next_frontier_.reserve(size);
+        next_leaves_.reserve(size);
+        next_states_.reserve(size);
+        std::size_t kept = 0;  // the next old leaf to keep
+        const auto keep_until = [&](std::size_t end) {
+            next_frontier_.insert(next_frontier_.end(), frontier_.begin() + kept,
+                                  frontier_.begin() + end);
+            next_leaves_.insert(next_leaves_.end(), leaves_.begin() + kept, leaves_.begin() + end);
+            std::move(states_.begin() + kept, states_.begin() + end,
+                      std::back_inserter(next_states_));
+        };
+        std::vector<CellId> new_leaves;
+        for (std::size_t i = 0; i < at.size(); ++i) {
+            keep_until(at[i]);
+            kept = at[i] + 1;
+            new_leaves.clear();
+            for (const FrontierCell& f : subtrees[i]) {
+                next_frontier_.push_back(f);
+                next_leaves_.push_back(f.cell);
+                next_states_.emplace_back();
+                new_leaves.push_back(f.cell);
             }
-            const std::size_t first = j;  // old was split: its subtree's leaves follow
-            while (j < leaves_.size() && leaves_[j].depth > old.depth &&
-                   leaves_[j].ancestor(old.depth) == old) {
-                ++j;
-            }
-            index_->replace(old, std::span(leaves_).subspan(first, j - first));
+            index_->replace(leaves_[at[i]], new_leaves);
         }
-        assert(j == leaves_.size());
-        states_ = std::move(states);
+        keep_until(leaves_.size());
+        std::swap(frontier_, next_frontier_);
+        std::swap(leaves_, next_leaves_);
+        std::swap(states_, next_states_);
     }
 
     /// The index in leaves_ of `leaf` (leaves_ is in octree order: a binary search).
@@ -676,6 +688,10 @@ class FrontierMesher::Impl {
     std::vector<std::size_t> selected_;    // those of candidates_ seen so far that it chose
     std::vector<CellId> to_split_;
     std::size_t split_cursor_ = 0;
+    // The arrays replace_leaves() fills, kept for their capacity.
+    std::vector<FrontierCell> next_frontier_;
+    std::vector<CellId> next_leaves_;
+    std::vector<LeafState> next_states_;
     std::vector<LeafMeshes> parts_;
     CrossingRoots roots_;
     PolygonizeResult result_;
