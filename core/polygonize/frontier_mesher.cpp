@@ -44,6 +44,8 @@ namespace isomesh {
 namespace {
 constexpr std::size_t kPointsPerTask = 1024;
 constexpr std::size_t kEdgesPerTask = 256;
+/// Crossings located in lockstep (locate_crossings) between two looks at the cancellation flag.
+constexpr std::size_t kEdgesPerBatch = 64;
 constexpr std::size_t kCellsPerTask = 256;
 /// Cleanup thresholds; the edge length is relative to the lattice step of the deepest leaf.
 constexpr double kMinEdgeFraction = 0.1;
@@ -135,10 +137,15 @@ void locate_leaf_crossings(EvaluatorPool& workers, const Lattice& lattice,
     workers.for_each(evaluated.size(), [&](std::size_t task, CountingEvaluator& evaluator) {
         if (budget.cancelled()) return;
         CornerCache cache(evaluator, lattice, &values);
-        const std::size_t begin = task * kEdgesPerTask;
-        const std::size_t n = std::min(edges.size() - begin, kEdgesPerTask);
-        locate_crossings(cache, lattice, std::span(cell_edges).subspan(begin, n), finest_depth,
-                         std::span(located).subspan(begin, n));
+        const std::size_t end = std::min(edges.size(), (task + 1) * kEdgesPerTask);
+        // Cancellation is checked between batches (each bisects up to 16 levels: on a long tape
+        // a whole task's would take milliseconds).
+        for (std::size_t i = task * kEdgesPerTask; i < end && !budget.cancelled();
+             i += kEdgesPerBatch) {
+            const std::size_t n = std::min(end - i, kEdgesPerBatch);
+            locate_crossings(cache, lattice, std::span(cell_edges).subspan(i, n), finest_depth,
+                             std::span(located).subspan(i, n));
+        }
         evaluated[task] = std::move(cache.values());
     });
     if (budget.cancelled()) return;
