@@ -192,7 +192,10 @@ class Simplifier {
         ++stamps_[u];
         push_edges(u);
         for (std::uint32_t w : mesh_.neighbours(u)) {
-            for (const Candidate& c : blocked_[w]) queue_.push(c);
+            for (const Candidate& c : blocked_[w]) {
+                // Stamps only grow: a stale candidate would be dropped when popped.
+                if (c.stamp_v == stamps_[c.v] && c.stamp_u == stamps_[c.u]) queue_.push(c);
+            }
             blocked_[w].clear();
         }
     }
