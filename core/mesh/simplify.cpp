@@ -240,7 +240,10 @@ class Simplifier {
         mesh_.neighbours(u, around_);
         around_.push_back(u);
         for (std::uint32_t w : around_) {
-            for (const Candidate& c : blocked_[w]) queue_.push(c);
+            for (const Candidate& c : blocked_[w]) {
+                // One whose end collapsed away would be dropped when popped.
+                if (!mesh_.incident(c.v).empty() && !mesh_.incident(c.u).empty()) queue_.push(c);
+            }
             blocked_[w].clear();
         }
     }

@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <iterator>
 #include <memory>
 #include <optional>
 #include <utility>
@@ -31,6 +32,7 @@
 #include <glm/geometric.hpp>
 
 #include "mesh/topology.h"
+#include "polygonize/ancestor_path.h"
 #include "polygonize/crossing_vertices.h"
 #include "polygonize/edge_roots.h"
 #include "polygonize/leaf_index.h"
@@ -42,6 +44,8 @@ namespace isomesh {
 namespace {
 constexpr std::size_t kPointsPerTask = 1024;
 constexpr std::size_t kEdgesPerTask = 256;
+/// Crossings located in lockstep (locate_crossings) between two looks at the cancellation flag.
+constexpr std::size_t kEdgesPerBatch = 64;
 constexpr std::size_t kCellsPerTask = 256;
 /// Cleanup thresholds; the edge length is relative to the lattice step of the deepest leaf.
 constexpr double kMinEdgeFraction = 0.1;
@@ -104,16 +108,10 @@ void evaluate_corners(EvaluatorPool& workers, const Lattice& lattice,
 /// Locates the crossing of every edge of `leaves` whose ends are on different sides and that is
 /// not in `crossings` yet (crossing_vertices.h), on steps of `finest_depth`, adding the values it
 /// evaluates to `values`.
-void locate_crossings(EvaluatorPool& workers, const Lattice& lattice,
-                      const std::vector<CellId>& leaves, int finest_depth, ValueMap& values,
-                      IdMap<CrossingKey>& crossings, const WorkBudget& budget) {
-    struct Edge {
-        std::uint64_t key;
-        glm::u32vec3 lower;
-        int axis;
-        int depth;
-    };
-    std::vector<Edge> edges;
+void locate_leaf_crossings(EvaluatorPool& workers, const Lattice& lattice,
+                           const std::vector<CellId>& leaves, int finest_depth, ValueMap& values,
+                           IdMap<CrossingKey>& crossings, const WorkBudget& budget) {
+    std::vector<std::pair<std::uint64_t, CellEdge>> edges;  // by cell_edge_key
     for (const CellId& cell : leaves) {
         for (int e = 0; e < 12; ++e) {
             const auto [c0, c1] = kEdgeCorners[e];
@@ -123,79 +121,71 @@ void locate_crossings(EvaluatorPool& workers, const Lattice& lattice,
                 continue;
             }
             const std::uint64_t key = cell_edge_key(p0, e / 4, cell.depth);
-            if (!crossings.contains(key)) edges.push_back({key, p0, e / 4, cell.depth});
+            if (!crossings.contains(key)) edges.push_back({key, {p0, e / 4, cell.depth}});
         }
     }
-    std::sort(edges.begin(), edges.end(),
-              [](const Edge& a, const Edge& b) { return a.key < b.key; });
+    const auto by_key = [](const auto& a, const auto& b) { return a.first < b.first; };
+    std::sort(edges.begin(), edges.end(), by_key);
     edges.erase(std::unique(edges.begin(), edges.end(),
-                            [](const Edge& a, const Edge& b) { return a.key == b.key; }),
+                            [](const auto& a, const auto& b) { return a.first == b.first; }),
                 edges.end());
+    std::vector<CellEdge> cell_edges;
+    cell_edges.reserve(edges.size());
+    for (const auto& [key, edge] : edges) cell_edges.push_back(edge);
     std::vector<CrossingKey> located(edges.size());
     std::vector<ValueMap> evaluated(task_count(edges.size(), kEdgesPerTask));
     workers.for_each(evaluated.size(), [&](std::size_t task, CountingEvaluator& evaluator) {
+        if (budget.cancelled()) return;
         CornerCache cache(evaluator, lattice, &values);
         const std::size_t end = std::min(edges.size(), (task + 1) * kEdgesPerTask);
-        for (std::size_t i = task * kEdgesPerTask; i < end && !budget.cancelled(); ++i) {
-            located[i] = locate_crossing(cache, lattice, edges[i].lower, edges[i].axis,
-                                         edges[i].depth, finest_depth);
+        // Cancellation is checked between batches (each bisects up to 16 levels: on a long tape
+        // a whole task's would take milliseconds).
+        for (std::size_t i = task * kEdgesPerTask; i < end && !budget.cancelled();
+             i += kEdgesPerBatch) {
+            const std::size_t n = std::min(end - i, kEdgesPerBatch);
+            locate_crossings(cache, lattice, std::span(cell_edges).subspan(i, n), finest_depth,
+                             std::span(located).subspan(i, n));
         }
         evaluated[task] = std::move(cache.values());
     });
     if (budget.cancelled()) return;
     for (ValueMap& part : evaluated) values.merge(part);
-    for (std::size_t i = 0; i < edges.size(); ++i) crossings.emplace(edges[i].key, located[i]);
+    for (std::size_t i = 0; i < edges.size(); ++i) crossings.emplace(edges[i].first, located[i]);
 }
 
-/// Replaces each cell of `which` (a subsequence of `frontier`'s cells) by its subtree, keeping
-/// the octree order: a pending cell by its 8 children, pending too; a settled cell by the leaves
-/// of its classified subtree (split_settled), or, in a mesh of an unfinished octree (`preview`),
-/// by its 8 children as pending cells too (classifying a subtree there could cost more than the
-/// whole octree so far). The new cells are appended to `added`. Once the budget is exhausted, no
-/// cell but the first starts: `split_count` says how many of `which`, from the first on, were
+/// The subtrees replacing cells `which` (in octree order): a pending cell's 8 children, pending
+/// too; a settled cell's leaves of its classified subtree (split_settled), or, in a mesh of an
+/// unfinished octree (`preview`), its 8 children as pending cells too (classifying a subtree there
+/// could cost more than the whole octree so far). Once the budget is exhausted, no cell but the
+/// first starts: the result holds the subtrees of as many of `which`, from the first on, as were
 /// split (the others are left as they were, for the next call).
-std::vector<FrontierCell> split_cells(EvaluatorPool& workers, const Lattice& lattice,
-                                      const OctreeSettings& settings,
-                                      const std::vector<FrontierCell>& frontier,
-                                      const std::vector<CellId>& which, bool preview,
-                                      ValueMap& values, std::vector<CellId>& added,
-                                      const WorkBudget& budget, std::size_t& split_count) {
+std::vector<std::vector<FrontierCell>> split_cells(EvaluatorPool& workers, const Lattice& lattice,
+                                                   const OctreeSettings& settings,
+                                                   std::span<const FrontierCell> which,
+                                                   bool preview, ValueMap& values,
+                                                   const WorkBudget& budget) {
     std::vector<std::vector<FrontierCell>> subtrees(which.size());
     std::vector<ValueMap> evaluated(which.size());
     std::vector<std::uint8_t> done(which.size(), 0);
-    std::size_t next = 0;
-    std::vector<CellState> states(which.size());
-    for (const FrontierCell& f : frontier) {
-        if (next < which.size() && f.cell == which[next]) states[next++] = f.state;
-    }
     workers.for_each(which.size(), [&](std::size_t i, CountingEvaluator& evaluator) {
         if (budget.cancelled() || (i > 0 && budget.exhausted())) return;
-        if (states[i] == CellState::Pending || preview) {
+        const CellId& cell = which[i].cell;
+        if (which[i].state == CellState::Pending || preview) {
             for (int octant = 0; octant < 8; ++octant)
-                subtrees[i].push_back({which[i].child(octant), CellState::Pending});
+                subtrees[i].push_back({cell.child(octant), CellState::Pending});
         } else {
             subtrees[i] =
-                split_settled(evaluator, lattice, settings, which[i], values, evaluated[i], budget);
+                split_settled(evaluator, lattice, settings, cell, values, evaluated[i], budget);
         }
         done[i] = 1;
     });
     // The cells split in a row from the first (tasks run in any order): the same frontier
     // whatever the threads' timing.
-    split_count = static_cast<std::size_t>(std::find(done.begin(), done.end(), 0) - done.begin());
-    std::vector<FrontierCell> result;
-    next = 0;
-    for (const FrontierCell& f : frontier) {
-        if (next < split_count && f.cell == which[next]) {
-            const std::vector<FrontierCell>& subtree = subtrees[next];
-            result.insert(result.end(), subtree.begin(), subtree.end());
-            for (const FrontierCell& s : subtree) added.push_back(s.cell);
-            values.merge(evaluated[next]);
-            ++next;
-        } else {
-            result.push_back(f);
-        }
-    }
-    return result;
+    const auto count =
+        static_cast<std::size_t>(std::find(done.begin(), done.end(), 0) - done.begin());
+    subtrees.resize(count);
+    for (std::size_t i = 0; i < count; ++i) values.merge(evaluated[i]);
+    return subtrees;
 }
 
 /// The surface's vertices on lattice edges: roots on the finest steps of the crossings used.
@@ -209,9 +199,10 @@ struct CrossingRoots {
 
 /// The cells, kRootGroupLevels above the finest, whose specialised tape serves the root finding
 /// of the crossings inside them (per-cell tape simplification: a CAD model's min and max branches
-/// mostly drop out there). One push per segment cost as much as it saved; per group of about a
-/// dozen crossings it is paid once.
-constexpr int kRootGroupLevels = 2;
+/// mostly drop out there). One push per segment cost as much as it saved; per group it is paid
+/// once, and the groups are walked to through their ancestors (find_roots). Two, three and four
+/// levels cost about the same on colonnade.vm and bear.vm at depth 3,7; three a few % less.
+constexpr int kRootGroupLevels = 3;
 
 /// The cell at `depth` holding the finest step `key` (closed boxes: a step on the upper face of
 /// the lattice is in the last cell).
@@ -253,30 +244,32 @@ CrossingRoots crossings_used(const std::vector<LeafMeshes>& parts, const Lattice
 }
 
 /// Finds the roots of crossings order[first, last) of `crossings`, all of one group, with the
-/// evaluator specialised to the group's cell, in lockstep batches (find_edge_roots), the budget's
-/// cancellation checked between batches. (Specialisation does not change any evaluation's
-/// result: the roots are those of the whole tape.)
-void find_group_roots(Evaluator& evaluator, const Lattice& lattice, const ValueMap& values,
-                      CrossingRoots& crossings, std::size_t first, std::size_t last,
-                      const WorkBudget& budget) {
+/// evaluator specialised to the group's cell (`path` walks to it), in lockstep batches
+/// (find_edge_roots), the budget's cancellation checked between batches. (Specialisation does
+/// not change any evaluation's result: the roots are those of the whole tape.)
+void find_group_roots(AncestorPath& path, Evaluator& evaluator, const Lattice& lattice,
+                      const ValueMap& values, CrossingRoots& crossings, std::size_t first,
+                      std::size_t last, const WorkBudget& budget) {
     std::vector<EdgeSegment> segments;
     segments.reserve(last - first);
     for (std::size_t k = first; k < last; ++k)
         segments.push_back(crossing_segment(values, lattice, crossings.keys[crossings.order[k]]));
     std::vector<EdgeRoot> roots(segments.size());
-    evaluator.push(lattice.cell_box(crossings.groups[crossings.order[first]]));
+    path.walk_to(crossings.groups[crossings.order[first]]);
     constexpr std::size_t kRootsBetweenChecks = 16;
     for (std::size_t i = 0; i < segments.size() && !budget.cancelled(); i += kRootsBetweenChecks) {
         const std::size_t n = std::min(kRootsBetweenChecks, segments.size() - i);
         find_edge_roots(evaluator, std::span(segments).subspan(i, n),
                         std::span(roots).subspan(i, n));
     }
-    evaluator.pop();
     for (std::size_t k = first; k < last; ++k)
         crossings.roots[crossings.order[k]] = roots[k - first];
 }
 
-/// Finds the roots of crossings order[begin, end) of `crossings`, group by group.
+/// Finds the roots of crossings order[begin, end) of `crossings`, group by group, the groups in
+/// octree order: the walk to each group's cell keeps the ancestors it shares with the previous
+/// one, and each push simplifies its parent's tape, not the whole tape (colonnade.vm: one push
+/// of each group from the whole tape was three quarters of the roots' time).
 void find_roots(EvaluatorPool& workers, const Lattice& lattice, const ValueMap& values,
                 CrossingRoots& crossings, std::size_t begin, std::size_t end,
                 const WorkBudget& budget) {
@@ -284,11 +277,12 @@ void find_roots(EvaluatorPool& workers, const Lattice& lattice, const ValueMap& 
                                                                  CountingEvaluator& evaluator) {
         const std::size_t first = begin + task * kEdgesPerTask;
         const std::size_t last = std::min(end, first + kEdgesPerTask);
+        AncestorPath path(evaluator, lattice);
         for (std::size_t k = first; k < last && !budget.cancelled();) {
             const CellId& group = crossings.groups[crossings.order[k]];
             std::size_t run = k + 1;
             while (run < last && crossings.groups[crossings.order[run]] == group) ++run;
-            find_group_roots(evaluator, lattice, values, crossings, k, run, budget);
+            find_group_roots(path, evaluator, lattice, values, crossings, k, run, budget);
             k = run;
         }
     });
@@ -403,7 +397,7 @@ class FrontierMesher::Impl {
             case Stage::corners:
                 return evaluate_fresh_corners();
             case Stage::grade:
-                return select_chunk(&LeafState::grade, [this](std::size_t i, CountingEvaluator&) {
+                return select_chunk(&LeafState::grade, [this](std::size_t i) {
                     return needs_grading(input(), leaves_[i]);
                 });
             case Stage::split:
@@ -412,10 +406,11 @@ class FrontierMesher::Impl {
             case Stage::locate:
                 return locate_chunk();
             case Stage::mesh:
-                return select_chunk(&LeafState::stale,
-                                    [this](std::size_t i, CountingEvaluator& evaluator) {
-                                        return !mesh_stale_leaf(i, evaluator);
-                                    });
+                return select_chunk(
+                    &LeafState::stale,
+                    [this](std::size_t i, CountingEvaluator& evaluator, AncestorPath& path) {
+                        return !mesh_stale_leaf(i, evaluator, path);
+                    });
             case Stage::roots:
                 return roots_chunk();
             case Stage::assemble:
@@ -495,7 +490,7 @@ class FrontierMesher::Impl {
         const std::size_t n = std::min(kChunk, unlocated_.size());
         const std::vector<CellId> chunk(unlocated_.end() - static_cast<std::ptrdiff_t>(n),
                                         unlocated_.end());
-        locate_crossings(workers_, lattice_, chunk, finest_, values_, crossings_, *budget_);
+        locate_leaf_crossings(workers_, lattice_, chunk, finest_, values_, crossings_, *budget_);
         if (budget_->cancelled()) return false;
         unlocated_.resize(unlocated_.size() - n);
         if (unlocated_.empty()) begin_selection(Stage::mesh, &LeafState::stale);
@@ -545,10 +540,10 @@ class FrontierMesher::Impl {
     }
 
     /// Meshes stale leaf i; false when it did not match.
-    bool mesh_stale_leaf(std::size_t i, CountingEvaluator& evaluator) {
+    bool mesh_stale_leaf(std::size_t i, CountingEvaluator& evaluator, AncestorPath& path) {
         LeafState& state = states_[i];
         LeafMeshes mesh;
-        mesh_leaf(evaluator, input(), leaves_[i], mesh);
+        mesh_leaf(evaluator, input(), leaves_[i], mesh, &path);
         const bool matched = mesh.unmatched.empty();
         state.mesh = mesh.triangles.empty() && mesh.extra_positions.empty()
                          ? nullptr
@@ -566,7 +561,8 @@ class FrontierMesher::Impl {
     }
 
     /// Those of `candidates` (leaf indices, in order) for which `predicate` holds, evaluated in
-    /// parallel (the predicate may take the task's evaluator), in order.
+    /// parallel (the predicate may take the task's evaluator and a walk of it along the task's
+    /// leaves, which are in octree order), in order.
     template <typename Predicate>
     std::vector<std::size_t> select(const std::vector<std::size_t>& candidates,
                                     const Predicate& predicate) {
@@ -575,11 +571,12 @@ class FrontierMesher::Impl {
             task_count(candidates.size(), kCellsPerTask),
             [&](std::size_t task, CountingEvaluator& evaluator) {
                 const std::size_t end = std::min(candidates.size(), (task + 1) * kCellsPerTask);
+                AncestorPath path(evaluator, lattice_);
                 for (std::size_t k = task * kCellsPerTask; k < end && !budget_->cancelled(); ++k) {
                     if constexpr (std::is_invocable_v<Predicate, std::size_t>) {
                         chosen[k] = predicate(candidates[k]);
                     } else {
-                        chosen[k] = predicate(candidates[k], evaluator);
+                        chosen[k] = predicate(candidates[k], evaluator, path);
                     }
                 }
             });
@@ -593,19 +590,29 @@ class FrontierMesher::Impl {
     /// Splits the leaves `cells` (in order), or as many of them from the first on as the budget
     /// allows (returned), keeping the index, the leaves' states and the crossings up to date.
     std::size_t split(const std::vector<CellId>& cells) {
+        std::vector<FrontierCell> which;
+        std::vector<std::size_t> at;  // their indices in leaves_
+        for (const CellId& cell : cells) {
+            at.push_back(position(cell));
+            which.push_back(frontier_[at.back()]);
+        }
+        const std::vector<std::vector<FrontierCell>> subtrees =
+            split_cells(workers_, lattice_, settings_, which, preview_, values_, *budget_);
+        const std::size_t count = subtrees.size();
         const std::size_t before = fresh_.size();
-        std::size_t count = 0;
-        frontier_ = split_cells(workers_, lattice_, settings_, frontier_, cells, preview_, values_,
-                                fresh_, *budget_, count);
-        std::vector<CellId> old_leaves = std::exchange(leaves_, cells_of(frontier_));
-        carry_states(old_leaves);
+        for (const std::vector<FrontierCell>& subtree : subtrees) {
+            for (const FrontierCell& f : subtree) fresh_.push_back(f.cell);
+        }
+        replace_leaves(std::span(at).first(count), subtrees);
         for (const CellId& cell : std::span(cells).first(count)) {
             for (const CellId& n : index_->face_neighbours(cell)) {
                 LeafState& state = states_[position(n)];
                 state.grade = state.stale = true;
             }
         }
-        const int finest = deepest(frontier_);
+        int finest = finest_;
+        for (std::size_t i = before; i < fresh_.size(); ++i)
+            finest = std::max(finest, fresh_[i].depth);
         if (finest != finest_) {
             // Crossings are named by steps of the finest leaf: all are located again.
             finest_ = finest;
@@ -618,27 +625,44 @@ class FrontierMesher::Impl {
         return count;
     }
 
-    /// Moves the states of the leaves kept from `old_leaves` to their places in leaves_; the
-    /// leaves that replaced a split one start fresh, and the index learns of them. (Both lists
-    /// are in octree order, a split cell's leaves where it was.)
-    void carry_states(const std::vector<CellId>& old_leaves) {
-        std::vector<LeafState> states(leaves_.size());
-        std::size_t j = 0;
-        for (std::size_t i = 0; i < old_leaves.size(); ++i) {
-            const CellId& old = old_leaves[i];
-            if (j < leaves_.size() && leaves_[j] == old) {
-                states[j++] = std::move(states_[i]);
-                continue;
+    /// Replaces leaves at[i] (ascending) by subtrees[i] in the frontier, the leaves and their
+    /// states (the new leaves start fresh, and the index learns of them), in one pass that keeps
+    /// the octree order; the old arrays become the next call's scratch space.
+    void replace_leaves(std::span<const std::size_t> at,
+                        const std::vector<std::vector<FrontierCell>>& subtrees) {
+        std::size_t size = frontier_.size() - at.size();
+        for (const std::vector<FrontierCell>& subtree : subtrees) size += subtree.size();
+        next_frontier_.clear();
+        next_leaves_.clear();
+        next_states_.clear();
+        next_frontier_.reserve(size);
+        next_leaves_.reserve(size);
+        next_states_.reserve(size);
+        std::size_t kept = 0;  // the next old leaf to keep
+        const auto keep_until = [&](std::size_t end) {
+            next_frontier_.insert(next_frontier_.end(), frontier_.begin() + kept,
+                                  frontier_.begin() + end);
+            next_leaves_.insert(next_leaves_.end(), leaves_.begin() + kept, leaves_.begin() + end);
+            std::move(states_.begin() + kept, states_.begin() + end,
+                      std::back_inserter(next_states_));
+        };
+        std::vector<CellId> new_leaves;
+        for (std::size_t i = 0; i < at.size(); ++i) {
+            keep_until(at[i]);
+            kept = at[i] + 1;
+            new_leaves.clear();
+            for (const FrontierCell& f : subtrees[i]) {
+                next_frontier_.push_back(f);
+                next_leaves_.push_back(f.cell);
+                next_states_.emplace_back();
+                new_leaves.push_back(f.cell);
             }
-            const std::size_t first = j;  // old was split: its subtree's leaves follow
-            while (j < leaves_.size() && leaves_[j].depth > old.depth &&
-                   leaves_[j].ancestor(old.depth) == old) {
-                ++j;
-            }
-            index_->replace(old, std::span(leaves_).subspan(first, j - first));
+            index_->replace(leaves_[at[i]], new_leaves);
         }
-        assert(j == leaves_.size());
-        states_ = std::move(states);
+        keep_until(leaves_.size());
+        std::swap(frontier_, next_frontier_);
+        std::swap(leaves_, next_leaves_);
+        std::swap(states_, next_states_);
     }
 
     /// The index in leaves_ of `leaf` (leaves_ is in octree order: a binary search).
@@ -672,6 +696,10 @@ class FrontierMesher::Impl {
     std::vector<std::size_t> selected_;    // those of candidates_ seen so far that it chose
     std::vector<CellId> to_split_;
     std::size_t split_cursor_ = 0;
+    // The arrays replace_leaves() fills, kept for their capacity.
+    std::vector<FrontierCell> next_frontier_;
+    std::vector<CellId> next_leaves_;
+    std::vector<LeafState> next_states_;
     std::vector<LeafMeshes> parts_;
     CrossingRoots roots_;
     PolygonizeResult result_;

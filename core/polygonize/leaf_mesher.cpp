@@ -145,8 +145,8 @@ class FaceGraph {
 class LeafMesher {
   public:
     LeafMesher(Evaluator& evaluator, const LeafMeshingInput& input, const CellId& leaf,
-               LeafMeshes& out)
-        : evaluator_(evaluator), in_(input), leaf_(leaf), out_(out) {}
+               LeafMeshes& out, AncestorPath* path)
+        : evaluator_(evaluator), path_(path), in_(input), leaf_(leaf), out_(out) {}
 
     void run() {
         const std::array<double, 8> values = corner_values(leaf_);
@@ -267,6 +267,10 @@ class LeafMesher {
         Box inner = in_.lattice.cell_box(leaf_);
         const glm::dvec3 margin = kFaceMargin * inner.size();
         inner = {inner.lo + margin, inner.hi - margin};
+        if (path_ != nullptr) {
+            path_->walk_to(leaf_.depth > 0 ? leaf_.parent() : leaf_);
+            path_ = nullptr;  // once per leaf
+        }
         const SurfacePoint point = project_to_surface(
             evaluator_, glm::clamp(sum / static_cast<double>(around.size()), inner.lo, inner.hi),
             inner);
@@ -340,6 +344,7 @@ class LeafMesher {
     void unmatched() { out_.unmatched.push_back(leaf_); }
 
     Evaluator& evaluator_;
+    AncestorPath* path_;  // walked to the leaf's parent before the first projection, or null
     const LeafMeshingInput& in_;
     CellId leaf_;
     LeafMeshes& out_;
@@ -365,8 +370,8 @@ bool needs_grading(const LeafMeshingInput& input, const CellId& leaf) {
 }
 
 void mesh_leaf(Evaluator& evaluator, const LeafMeshingInput& input, const CellId& leaf,
-               LeafMeshes& out) {
-    LeafMesher(evaluator, input, leaf, out).run();
+               LeafMeshes& out, AncestorPath* path) {
+    LeafMesher(evaluator, input, leaf, out, path).run();
 }
 
 }  // namespace isomesh

@@ -10,6 +10,7 @@
 #include <glm/vec3.hpp>
 
 #include "eval/evaluator.h"
+#include "polygonize/ancestor_path.h"
 #include "polygonize/crossing_vertices.h"
 #include "polygonize/id_tables.h"
 #include "polygonize/lattice.h"
@@ -56,8 +57,13 @@ struct LeafMeshingInput {
 /// to the one its triangle edge joins it to, and every segment on the face is used; otherwise the
 /// leaf is reported unmatched (typically the surface pokes across its edge between lattice
 /// points, or a face test decides differently at the finer scale) and must be split.
+///
+/// Vertices placed inside the leaf are projected with `evaluator`; when `path` (on the same
+/// evaluator) is given, it walks to the leaf's parent before the first projection, so that the
+/// projection runs on the tape specialised to it (the same results, a shorter tape: leaves in
+/// octree order share the walk's ancestors).
 void mesh_leaf(Evaluator& evaluator, const LeafMeshingInput& input, const CellId& leaf,
-               LeafMeshes& out);
+               LeafMeshes& out, AncestorPath* path = nullptr);
 
 /// Whether a finer neighbour across some face of `leaf` is more than one level deeper where the
 /// surface crosses that face (a sign change on the neighbour's face): then `leaf` must be split,

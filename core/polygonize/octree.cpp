@@ -30,6 +30,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "polygonize/ancestor_path.h"
+
 namespace isomesh {
 namespace {
 
@@ -71,9 +73,9 @@ class CellClassifier {
         : evaluator_(evaluator),
           lattice_(lattice),
           settings_(settings),
-          corners_(evaluator, lattice, known) {}
+          corners_(evaluator, lattice, known),
+          path_(evaluator, lattice) {}
 
-    ~CellClassifier() { walk_to_depth(0); }
     CellClassifier(const CellClassifier&) = delete;
     CellClassifier& operator=(const CellClassifier&) = delete;
 
@@ -86,7 +88,7 @@ class CellClassifier {
             if (budget.exhausted()) break;
             std::size_t end = done + 1;
             while (end < cells.size() && cells[end].parent() == cells[done].parent()) ++end;
-            if (cells[done].depth > 0) walk_to(cells[done].parent());
+            if (cells[done].depth > 0) path_.walk_to(cells[done].parent());
             const std::size_t classified =
                 classify_siblings(cells.subspan(done, end - done), out.subspan(done, end - done),
                                   [&budget] { return budget.exhausted(); });
@@ -226,34 +228,12 @@ class CellClassifier {
         return true;
     }
 
-    /// Specialises the evaluator to `cell` and its ancestors (tape simplification), reusing the
-    /// specialisations of the ancestors it shares with the previous cell.
-    void walk_to(const CellId& cell) {
-        std::size_t common = 0;
-        while (common < path_.size() && common <= static_cast<std::size_t>(cell.depth) &&
-               path_[common] == cell.ancestor(static_cast<int>(common)))
-            ++common;
-        walk_to_depth(common);
-        for (int level = static_cast<int>(path_.size()); level <= cell.depth; ++level) {
-            const CellId ancestor = cell.ancestor(level);
-            evaluator_.push(lattice_.cell_box(ancestor));
-            path_.push_back(ancestor);
-        }
-    }
-
-    void walk_to_depth(std::size_t depth) {
-        while (path_.size() > depth) {
-            evaluator_.pop();
-            path_.pop_back();
-        }
-    }
-
     Evaluator& evaluator_;
     const Lattice& lattice_;
     const OctreeSettings& settings_;
     CornerCache corners_;
-    EdgeRootCounts edges_;      // of the siblings being classified (classify_siblings)
-    std::vector<CellId> path_;  // path_[k]: the pushed ancestor at depth k
+    EdgeRootCounts edges_;  // of the siblings being classified (classify_siblings)
+    AncestorPath path_;     // to the parent of the siblings being classified
     std::vector<Box> boxes_;
     std::vector<glm::u32vec3> points_;
     std::vector<IntervalValue> values_;
@@ -277,13 +257,55 @@ std::vector<std::pair<std::size_t, std::size_t>> task_ranges(std::span<const Cel
 
 }  // namespace
 
+void PendingCells::add(const CellId& cell) {
+    next_.push_back(level_order_key(cell));
+    ++size_;
+}
+
+void PendingCells::take_front(std::size_t n, std::vector<CellId>& out) {
+    if (cursor_ == level_.size()) {
+        // The level is done: the next one, made in the order its parents were classified
+        // (mostly octree order already), becomes the level in octree order.
+        level_.swap(next_);
+        next_.clear();
+        cursor_ = 0;
+        std::sort(level_.begin(), level_.end());
+    }
+    const std::size_t end = std::min(level_.size(), cursor_ + n);
+    for (; cursor_ < end; ++cursor_) out.push_back(cell_of_level_order_key(level_[cursor_]));
+}
+
+void PendingCells::return_front(std::span<const CellId> cells) {
+    assert(cells.size() <= cursor_);
+    cursor_ -= cells.size();
+    for (std::size_t i = 0; i < cells.size(); ++i) level_[cursor_ + i] = level_order_key(cells[i]);
+}
+
+std::vector<CellId> PendingCells::cells() const {
+    std::vector<CellId> out;
+    out.reserve(size_);
+    for (std::size_t i = cursor_; i < level_.size(); ++i)
+        out.push_back(cell_of_level_order_key(level_[i]));
+    std::vector<std::uint64_t> next = next_;
+    std::sort(next.begin(), next.end());
+    for (std::uint64_t key : next) out.push_back(cell_of_level_order_key(key));
+    return out;
+}
+
+void PendingCells::clear() {
+    level_.clear();
+    next_.clear();
+    cursor_ = 0;
+    size_ = 0;
+}
+
 Octree::Octree(const Lattice& lattice, const OctreeSettings& settings)
     : lattice_(lattice), settings_(settings) {
     assert(lattice.max_depth() == kMaxOctreeDepth);
     assert(0 <= settings.min_depth && settings.min_depth <= settings.max_depth &&
            settings.max_depth <= settings.feature_depth &&
            settings.feature_depth <= kMaxOctreeDepth);
-    pending_.insert(level_order_key(CellId{}));
+    pending_.add(CellId{});
     counts_.pending = 1;
 }
 
@@ -297,12 +319,7 @@ void Octree::advance(EvaluatorPool& pool, ValueMap& values, const WorkBudget& bu
         // without passing max_frontier.
         const std::size_t room = std::min(kCellsPerRound, (max_frontier - frontier) / 7 + 1);
         round.clear();
-        const int depth = cell_of_level_order_key(*pending_.begin()).depth;
-        for (auto it = pending_.begin(); it != pending_.end() && round.size() < room; ++it) {
-            const CellId cell = cell_of_level_order_key(*it);
-            if (cell.depth != depth) break;
-            round.push_back(cell);
-        }
+        pending_.take_front(room, round);
         const auto ranges = task_ranges(round);
         std::vector<CellOutcome> outcomes(round.size());
         std::vector<std::size_t> classified(ranges.size(), 0);
@@ -316,14 +333,19 @@ void Octree::advance(EvaluatorPool& pool, ValueMap& values, const WorkBudget& bu
             evaluated[task] = std::move(classifier.corners().values());
         });
         // In octree order, whatever the workers' timing: the frontier does not depend on it.
+        std::vector<CellId> left;  // not classified: budget exhausted
         for (std::size_t task = 0; task < ranges.size(); ++task) {
-            for (std::size_t i = ranges[task].first; i < ranges[task].first + classified[task];
-                 ++i) {
-                pending_.erase(level_order_key(round[i]));
+            const auto [begin, end] = ranges[task];
+            for (std::size_t i = begin; i < begin + classified[task]; ++i) {
+                pending_.classified();
                 apply(round[i], outcomes[i]);
             }
+            left.insert(left.end(),
+                        round.begin() + static_cast<std::ptrdiff_t>(begin + classified[task]),
+                        round.begin() + static_cast<std::ptrdiff_t>(end));
             values.merge(evaluated[task]);
         }
+        pending_.return_front(left);
         counts_.pending = pending_.size();
     }
 }
@@ -345,8 +367,7 @@ void Octree::apply(const CellId& cell, CellOutcome outcome) {
         case CellOutcome::Split:
             if (pending_.size() + settled_.size() + 8 <= settings_.max_cells &&
                 feature_room(cell)) {
-                for (int octant = 0; octant < 8; ++octant)
-                    pending_.insert(level_order_key(cell.child(octant)));
+                for (int octant = 0; octant < 8; ++octant) pending_.add(cell.child(octant));
                 return;
             }
             ++counts_.capped;
@@ -373,8 +394,8 @@ bool Octree::feature_room(const CellId& cell) {
 }
 
 void Octree::settle_pending() {
-    for (std::uint64_t key : pending_) {
-        settled_.push_back({cell_of_level_order_key(key), CellState::Unresolved});
+    for (const CellId& cell : pending_.cells()) {
+        settled_.push_back({cell, CellState::Unresolved});
         ++counts_.unresolved;
     }
     pending_.clear();
@@ -383,7 +404,7 @@ void Octree::settle_pending() {
 
 std::vector<FrontierCell> Octree::frontier() const {
     std::vector<FrontierCell> cells = settled_;
-    for (std::uint64_t key : pending_) cells.push_back({cell_of_level_order_key(key)});
+    for (const CellId& cell : pending_.cells()) cells.push_back({cell});
     std::sort(cells.begin(), cells.end(), [&](const FrontierCell& a, const FrontierCell& b) {
         return lattice_.octree_order(a.cell) < lattice_.octree_order(b.cell);
     });

@@ -16,7 +16,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <set>
 #include <span>
 #include <vector>
 
@@ -69,6 +68,33 @@ struct OctreeCounts {
 /// What the classification decided for one cell (see octree.cpp for the rules).
 enum class CellOutcome : std::uint8_t { Empty, Region, Leaf, Split, Unresolved };
 
+/// The cells not yet classified, in level order (shallowest first, octree order within a level):
+/// those of the level being classified, then the children made meanwhile (never more than these
+/// two levels). Two arrays: a balanced tree paid an allocation and a rebalancing per cell.
+class PendingCells {
+  public:
+    bool empty() const { return size_ == 0; }
+    std::size_t size() const { return size_; }
+    /// A cell one level below those being classified (or the root).
+    void add(const CellId& cell);
+    /// Appends up to `n` of the first pending cells, all of one level, to `out`: they are
+    /// being classified (still counted as pending until classified()).
+    void take_front(std::size_t n, std::vector<CellId>& out);
+    /// One of the cells taken is classified.
+    void classified() { --size_; }
+    /// The cells taken last and not classified (in order) are pending again, first.
+    void return_front(std::span<const CellId> cells);
+    /// Every pending cell, in level order.
+    std::vector<CellId> cells() const;
+    void clear();
+
+  private:
+    std::vector<std::uint64_t> level_;  // level_order_key, sorted; pending from cursor_ on
+    std::size_t cursor_ = 0;
+    std::vector<std::uint64_t> next_;  // the level below, in the order made
+    std::size_t size_ = 0;
+};
+
 class Octree {
   public:
     /// Starts with the root cell pending. Preconditions: lattice.max_depth() == kMaxOctreeDepth;
@@ -104,7 +130,7 @@ class Octree {
 
     Lattice lattice_;
     OctreeSettings settings_;
-    std::set<std::uint64_t> pending_;  // level_order_key: shallowest first, octree order
+    PendingCells pending_;
     std::vector<FrontierCell> settled_;
     OctreeCounts counts_;
     std::size_t feature_cells_ = 0;  // cells made by splits at or below max_depth

@@ -1,6 +1,8 @@
-// Polygonizer::mesh_slice: the final mesh made over many short budgets is the mesh made at once.
+// Polygonizer::advance and mesh_slice: the octree and the final mesh made over many short budgets
+// are those made at once.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -38,6 +40,32 @@ TEST(Polygonizer, mesh_slice_over_many_budgets_gives_the_mesh_of_one_call) {
         EXPECT_EQ(sliced->stats.cells, whole.stats.cells);
         EXPECT_EQ(sliced->stats.unresolved_cells, whole.stats.unresolved_cells);
     }
+}
+
+// The octree classified a few cells per budget (a round's tasks each stop after a family, and
+// the cells they left are classified first in the next call) has the frontier of one call.
+TEST(Polygonizer, advance_over_many_budgets_gives_the_octree_of_one_call) {
+    const auto field = test::field_of("x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8=0");
+    PolygonizeSettings settings;
+    settings.box = {{-3.3, -3.3, -3.3}, {3.3, 3.3, 3.3}};
+    settings.min_depth = 3;
+    settings.max_depth = 6;
+    settings.threads = 2;
+    const PolygonizeResult whole = polygonize(*field, settings);
+
+    Polygonizer polygonizer(field, settings);
+    // A clock that ticks at each look (from both workers): each budget lasts a few looks.
+    auto ticks = std::make_shared<std::atomic<std::int64_t>>(0);
+    int calls = 0;
+    for (; !polygonizer.complete(); ++calls) {
+        polygonizer.advance(WorkBudget(3, [ticks] { return (*ticks)++; }));
+        ASSERT_LT(calls, 100000);
+    }
+    EXPECT_GT(calls, 100);  // it was sliced, mostly in the middle of rounds
+    const PolygonizeResult sliced = polygonizer.mesh(WorkBudget{});
+    test::expect_identical(sliced.mesh, whole.mesh);
+    EXPECT_EQ(sliced.stats.cells, whole.stats.cells);
+    EXPECT_EQ(sliced.stats.unresolved_cells, whole.stats.unresolved_cells);
 }
 
 }  // namespace
