@@ -165,8 +165,10 @@ bool CollapseMesh::can_collapse(std::uint32_t v, std::uint32_t u) const {
     // ear: where the surface meets the box near a lattice corner it sits on, its three triangles
     // must be able to become two, or the zero-length edge there stays).
     for (std::uint32_t o : opposites) {
+        const std::size_t has = incident_[o].size();
+        if (has >= 4) continue;  // keeps 3 or more either way: no need to ask about the boundary
         const std::size_t keeps = on_boundary(o) ? 1 : 3;
-        if (incident_[o].size() < keeps + 1) return false;
+        if (has < keeps + 1) return false;
     }
     return keeps_orientation(v, u);
 }
