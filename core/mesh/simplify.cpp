@@ -7,6 +7,12 @@
 // neighbourhoods: collapses are made cheapest first (ties by vertex indices, so the result is
 // deterministic), each re-checked when popped, since the link condition and the orientation test
 // (edge_collapse.h) depend on the neighbourhood as it is then.
+//
+// The queue is updated lazily (the lazy evaluation of Minoux, "Accelerated greedy algorithms
+// for maximizing submodular set functions", 1978): a quadric only grows, so a candidate's cost
+// only rises after it is queued; the entry is a lower bound, recomputed when it reaches the top,
+// and queued again if it rose. The top entry whose cost is current is the cheapest candidate, so
+// the collapses are the eager order's, while a collapse queues only the edges it creates.
 #include "mesh/simplify.h"
 
 #include <algorithm>
