@@ -50,17 +50,14 @@ CollapseMesh::CollapseMesh(Mesh& mesh, std::span<const std::uint8_t> box_faces)
 }
 
 std::vector<std::uint32_t> CollapseMesh::triangles_on_edge(std::uint32_t a, std::uint32_t b) const {
-    // Scan the shorter fan: after many collapses one end can have hundreds of triangles.
-    if (incident_[b].size() < incident_[a].size()) std::swap(a, b);
-    std::vector<std::uint32_t> result;
-    for (std::uint32_t t : incident_[a]) {
-        if (contains(mesh_.triangles[t], b)) result.push_back(t);
-    }
+    std::vector<std::uint32_t> result(triangles_on_edge(a, b, {}));
+    triangles_on_edge(a, b, result);
     return result;
 }
 
 std::size_t CollapseMesh::triangles_on_edge(std::uint32_t a, std::uint32_t b,
                                             std::span<std::uint32_t> out) const {
+    // Scan the shorter fan: after many collapses one end can have hundreds of triangles.
     if (incident_[b].size() < incident_[a].size()) std::swap(a, b);
     std::size_t count = 0;
     for (std::uint32_t t : incident_[a]) {
