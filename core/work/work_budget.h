@@ -57,8 +57,13 @@ class WorkBudget {
     /// `limit` units of `clock` from now; `cancel` may be null.
     WorkBudget(std::int64_t limit, Clock clock, const std::atomic<bool>* cancel = nullptr)
         : cancel_(cancel), clock_(std::make_shared<Clock>(std::move(clock))) {
-        if (clock_->target<ThreadCpuClock>() != nullptr) pace_ = std::make_shared<Pace>();
-        start_ = read();
+        if (clock_->target<ThreadCpuClock>() != nullptr) {
+            const std::int64_t wall = wall_microseconds();
+            start_ = (*clock_)();
+            pace_ = std::make_shared<Pace>(wall, start_);
+        } else {
+            start_ = (*clock_)();
+        }
         end_ = limit >= std::numeric_limits<std::int64_t>::max() - start_
                    ? std::numeric_limits<std::int64_t>::max()
                    : start_ + limit;
@@ -108,9 +113,9 @@ class WorkBudget {
     /// cpu + (w - wall). Both as microseconds from the first reading, packed in one atomic word
     /// (32 bits each: an hour) so that threads sharing the budget see a consistent pair.
     struct Pace {
-        std::int64_t wall_base = wall_microseconds();
-        std::int64_t cpu_base = -1;  // set by the first reading
-        std::atomic<std::uint64_t> last{0};
+        Pace(std::int64_t wall, std::int64_t cpu) : wall_base(wall), cpu_base(cpu) {}
+        const std::int64_t wall_base, cpu_base;  // the first reading
+        std::atomic<std::uint64_t> last{0};      // the last, as (wall, cpu) from the first
 
         std::int64_t upper_bound() const {
             const std::uint64_t packed = last.load(std::memory_order_acquire);
@@ -129,12 +134,8 @@ class WorkBudget {
     /// The clock now (and, for a paced clock, the pair its bound starts from).
     std::int64_t read() const {
         if (!pace_) return (*clock_)();
-        const std::int64_t wall = wall_microseconds();
+        const std::int64_t wall = wall_microseconds();  // before the reading: see Pace
         const std::int64_t now = (*clock_)();
-        if (pace_->cpu_base < 0) {
-            pace_->cpu_base = now;  // in the constructor, before the budget is shared
-            pace_->wall_base = wall;
-        }
         pace_->record(wall, now);
         return now;
     }
