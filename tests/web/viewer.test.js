@@ -498,7 +498,9 @@ test('a budget below what the shape needs: "finding the shape…" while the serv
   } finally {
     viewer.messages.release();
   }
-  const s = await waitForSnapshot(page, `(s, arg) => s.status === 'converged' && s.surfaces[1]?.expression === arg && s.surfaces[1].outcome?.budgetUnreachable`, gyroid);
+  // The rows are redrawn at the next animation frame: the outcome may be in the snapshot a frame
+  // before the row's note.
+  const s = await waitForSnapshot(page, `(s, arg) => s.status === 'converged' && s.surfaces[1]?.expression === arg && s.surfaces[1].outcome?.budgetUnreachable && s.surfaces[1].notes.length > 0`, gyroid);
   const held = await assertCountIsTheTruth();
   const f = s.surfaces[1];
   assert.equal(s.surfaces[0].triangles, 0, 'row 1 (x=x) holds none');
