@@ -16,8 +16,10 @@ export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
 if ! command -v clang++ >/dev/null; then
   echo "fuzz: clang++ not found, fuzz targets skipped"; exit 0
 fi
+# -O1 -gline-tables-only: OSS-Fuzz's flags (line tables are all a sanitizer's stack trace reads);
+# the build's CPU time 573 -> 364 s against RelWithDebInfo's -O2 -g (same run, 2 cores).
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DISOMESH_FUZZ=ON -DISOMESH_ASSERTS=ON -DISOMESH_BUILD_BENCH=OFF >/dev/null
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" -DISOMESH_FUZZ=ON -DISOMESH_ASSERTS=ON -DISOMESH_BUILD_BENCH=OFF >/dev/null
 
 seconds_of() {
   local var="FUZZ_SECONDS_${1^^}"
