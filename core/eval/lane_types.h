@@ -1,4 +1,4 @@
-// Lane types for the kernels (interval_kernels.cpp, point_kernels.cpp): the same formulas run on
+// Lane types for the kernels (interval_lanes.h, point_kernels.cpp): the same formulas run on
 // one double or on a vector of kChunk doubles (GCC and clang vector extensions), whose mask type
 // (the result of comparing two lane values) selects lane by lane with `m ? a : b`. Internal to the
 // kernels' source files, inside their anonymous namespaces' reach only.
