@@ -411,6 +411,28 @@ std::vector<FrontierCell> Octree::frontier() const {
     return cells;
 }
 
+std::vector<FrontierCell> coarsened(std::vector<FrontierCell> frontier, std::size_t max_cells) {
+    std::vector<FrontierCell> merged;
+    while (frontier.size() > max_cells) {
+        int deepest = 0;
+        for (const FrontierCell& f : frontier) deepest = std::max(deepest, f.cell.depth);
+        if (deepest <= 1) break;
+        // The children of one parent are consecutive in octree order (the frontier holds no
+        // cell deeper than them), and the parent's order is its first child's origin's.
+        merged.clear();
+        for (const FrontierCell& f : frontier) {
+            if (f.cell.depth < deepest) {
+                merged.push_back(f);
+            } else if (merged.empty() || merged.back().cell != f.cell.parent()) {
+                merged.push_back({f.cell.parent(), CellState::Pending});
+            }
+        }
+        assert(merged.size() < frontier.size());
+        frontier.swap(merged);
+    }
+    return frontier;
+}
+
 namespace {
 
 /// Depth-first classification of a subtree (split_settled): down to max_depth, as the octree
