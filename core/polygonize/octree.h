@@ -134,6 +134,10 @@ class Octree {
     std::vector<FrontierCell> settled_;
     OctreeCounts counts_;
     std::size_t feature_cells_ = 0;  // cells made by splits at or below max_depth
+    /// Root counts of the edges of the cells classified at edge_counts_depth_ (the level being
+    /// classified): neighbouring families share the edges of their common faces.
+    EdgeRootCounts edge_counts_;
+    int edge_counts_depth_ = -1;
 };
 
 /// `frontier` (in octree order) with its deepest cells merged into their parents, level by level,
