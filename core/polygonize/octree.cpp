@@ -441,7 +441,9 @@ std::vector<FrontierCell> coarsened(std::vector<FrontierCell> frontier, std::siz
                 merged.push_back({f.cell.parent(), CellState::Pending});
             }
         }
-        assert(merged.size() < frontier.size());
+        // Not fewer cells where each parent held one (the rest empty), but one level less: the
+        // loop ends.
+        assert(merged.size() <= frontier.size());
         frontier.swap(merged);
     }
     return frontier;
