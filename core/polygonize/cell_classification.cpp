@@ -97,7 +97,7 @@ struct EdgeSurvey {
 /// holds one root if its ends differ in sign, else none, as its own enclosure (inside the
 /// cell's) would prove, so it needs no evaluation.
 EdgeSurvey survey_edges(Evaluator& evaluator, CornerCache& corners, const Lattice& lattice,
-                        const CellId& cell, int max_bisections, EdgeRootCounts* known,
+                        const CellId& cell, int max_bisections, EdgeRootTables tables,
                         unsigned monotone) {
     std::array<EdgeSegment, 12> edges;
     std::array<std::uint64_t, 12> keys;
@@ -115,9 +115,11 @@ EdgeSurvey survey_edges(Evaluator& evaluator, CornerCache& corners, const Lattic
             counted[e] = EdgeRootCount{is_inside(edges[e].fa) != is_inside(edges[e].fb)};
             continue;
         }
-        if (known != nullptr) {
-            const auto it = known->find(keys[e]);
-            if (it != known->end()) counted[e] = it->second;
+        for (const EdgeRootCounts* table :
+             {tables.known, static_cast<const EdgeRootCounts*>(tables.own)}) {
+            if (table == nullptr || counted[e]) continue;
+            const auto it = table->find(keys[e]);
+            if (it != table->end()) counted[e] = it->second;
         }
         if (!counted[e]) {
             slot[e] = fresh;
@@ -136,7 +138,7 @@ EdgeSurvey survey_edges(Evaluator& evaluator, CornerCache& corners, const Lattic
         } else {
             const double min_length = std::ldexp(edges[e].length(), -max_bisections);
             count = count_edge_roots(evaluator, edges[e], min_length, 2, &wholes[slot[e]]);
-            if (known != nullptr) known->emplace(keys[e], count);
+            if (tables.own != nullptr) tables.own->emplace(keys[e], count);
         }
         survey.roots += count.roots;
         survey.max_roots = std::max(survey.max_roots, count.roots);
@@ -199,7 +201,7 @@ unsigned monotone_axes(const Interval (&gradient)[3]) {
 
 CellVerdict classify_cell(Evaluator& evaluator, CornerCache& corners, const Lattice& lattice,
                           const CellId& cell, const IntervalGradient& enclosure, int max_bisections,
-                          EdgeRootCounts* edges) {
+                          EdgeRootTables edges) {
     const bool continuous =
         !enclosure.value.maybe_discontinuous && !enclosure.value.maybe_undefined;
     if (!continuous) {

@@ -62,17 +62,26 @@ bool satisfies_gradient_cone(const Interval (&gradient)[3]);
 unsigned monotone_axes(const Interval (&gradient)[3]);
 
 /// Root counts of cell edges, by cell_edge_key (crossing_vertices.h; it holds the cell's depth,
-/// hence max_bisections): the 8 children of a cell have 54 distinct edges among their 96, whose
-/// roots are then counted once (the octree keeps one table per family).
+/// hence max_bisections): the 8 children of a cell have 54 distinct edges among their 96, and
+/// neighbouring families share the edges of their common faces, whose roots are then counted once
+/// (the octree keeps one table per level: a count, count_edge_roots', is a function of the edge
+/// and its depth alone).
 using EdgeRootCounts = IdMap<EdgeRootCount>;
+
+/// Where root counts are looked up and kept: `known` (read-only, shared between tasks) first,
+/// then `own`, to which new counts are added. Either may be null.
+struct EdgeRootTables {
+    const EdgeRootCounts* known = nullptr;
+    EdgeRootCounts* own = nullptr;
+};
 
 /// Decides the fate of `cell` (at or below the minimum depth), given the enclosure of f and grad f
 /// over it, whose interval of f contains 0. Evaluates corners through `corners` and edges and
 /// faces through `evaluator`; root counting halves an edge at most `max_bisections` times, its
-/// results read from and added to `edges` where not null. See cell_classification.cpp for the
-/// rules and why they suffice.
+/// results read from and added to `edges`. See cell_classification.cpp for the rules and why
+/// they suffice.
 CellVerdict classify_cell(Evaluator& evaluator, CornerCache& corners, const Lattice& lattice,
                           const CellId& cell, const IntervalGradient& enclosure, int max_bisections,
-                          EdgeRootCounts* edges = nullptr);
+                          EdgeRootTables edges = {});
 
 }  // namespace isomesh

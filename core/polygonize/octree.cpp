@@ -68,11 +68,14 @@ bool may_hide_feature(const IntervalGradient& enclosure) {
 /// Classifies cells one level at a time; walks each cell's ancestors with push/pop.
 class CellClassifier {
   public:
+    /// Values in `known` and root counts in `known_edges` (either may be null) are not evaluated
+    /// again; those it evaluates are kept (corners(), edges()).
     CellClassifier(Evaluator& evaluator, const Lattice& lattice, const OctreeSettings& settings,
-                   const ValueMap* known)
+                   const ValueMap* known, const EdgeRootCounts* known_edges = nullptr)
         : evaluator_(evaluator),
           lattice_(lattice),
           settings_(settings),
+          known_edges_(known_edges),
           corners_(evaluator, lattice, known),
           path_(evaluator, lattice) {}
 
@@ -110,6 +113,7 @@ class CellClassifier {
     }
 
     CornerCache& corners() { return corners_; }
+    EdgeRootCounts& edges() { return edges_; }
 
   private:
     /// The siblings' enclosures in one batch, then each one's outcome; stops (returning how many
@@ -128,7 +132,6 @@ class CellClassifier {
         enclosures_.resize(cells.size());
         evaluator_.interval_gradients(boxes_, enclosures_);
         prefetch_corners(cells);
-        edges_.clear();  // the siblings share edges, whose root counts edges_ keeps
         for (std::size_t i = 0; i < cells.size(); ++i) {
             if (i > 0 && stop()) return i;
             out[i] = outcome(cells[i], enclosures_[i]);
@@ -174,8 +177,8 @@ class CellClassifier {
         }
         const int bisections =
             std::max(settings_.max_depth, cell.depth) - cell.depth + kSubLatticeBisections;
-        switch (
-            classify_cell(evaluator_, corners_, lattice_, cell, enclosure, bisections, &edges_)) {
+        switch (classify_cell(evaluator_, corners_, lattice_, cell, enclosure, bisections,
+                              {known_edges_, &edges_})) {
             case CellVerdict::Empty:
                 return CellOutcome::Empty;
             case CellVerdict::Leaf:
@@ -231,9 +234,12 @@ class CellClassifier {
     Evaluator& evaluator_;
     const Lattice& lattice_;
     const OctreeSettings& settings_;
+    const EdgeRootCounts* known_edges_;
     CornerCache corners_;
-    EdgeRootCounts edges_;  // of the siblings being classified (classify_siblings)
-    AncestorPath path_;     // to the parent of the siblings being classified
+    // Of the cells classified (siblings and neighbouring families share edges), beyond those in
+    // known_edges_.
+    EdgeRootCounts edges_;
+    AncestorPath path_;  // to the parent of the siblings being classified
     std::vector<Box> boxes_;
     std::vector<glm::u32vec3> points_;
     std::vector<IntervalValue> values_;
@@ -324,13 +330,20 @@ void Octree::advance(EvaluatorPool& pool, ValueMap& values, const WorkBudget& bu
         std::vector<CellOutcome> outcomes(round.size());
         std::vector<std::size_t> classified(ranges.size(), 0);
         std::vector<ValueMap> evaluated(ranges.size());
+        std::vector<EdgeRootCounts> counted(ranges.size());
+        if (round.front().depth != edge_counts_depth_) {
+            // Edges of cells at one depth are shared only with cells at that depth.
+            edge_counts_.clear();
+            edge_counts_depth_ = round.front().depth;
+        }
         pool.for_each(ranges.size(), [&](std::size_t task, CountingEvaluator& evaluator) {
             const auto [begin, end] = ranges[task];
-            CellClassifier classifier(evaluator, lattice_, settings_, &values);
+            CellClassifier classifier(evaluator, lattice_, settings_, &values, &edge_counts_);
             classified[task] =
                 classifier.classify(std::span(round).subspan(begin, end - begin),
                                     std::span(outcomes).subspan(begin, end - begin), budget);
             evaluated[task] = std::move(classifier.corners().values());
+            counted[task] = std::move(classifier.edges());
         });
         // In octree order, whatever the workers' timing: the frontier does not depend on it.
         std::vector<CellId> left;  // not classified: budget exhausted
@@ -344,6 +357,7 @@ void Octree::advance(EvaluatorPool& pool, ValueMap& values, const WorkBudget& bu
                         round.begin() + static_cast<std::ptrdiff_t>(begin + classified[task]),
                         round.begin() + static_cast<std::ptrdiff_t>(end));
             values.merge(evaluated[task]);
+            edge_counts_.merge(counted[task]);
         }
         pending_.return_front(left);
         counts_.pending = pending_.size();
@@ -409,6 +423,30 @@ std::vector<FrontierCell> Octree::frontier() const {
         return lattice_.octree_order(a.cell) < lattice_.octree_order(b.cell);
     });
     return cells;
+}
+
+std::vector<FrontierCell> coarsened(std::vector<FrontierCell> frontier, std::size_t max_cells) {
+    std::vector<FrontierCell> merged;
+    while (frontier.size() > max_cells) {
+        int deepest = 0;
+        for (const FrontierCell& f : frontier) deepest = std::max(deepest, f.cell.depth);
+        if (deepest <= 1) break;
+        // The children of one parent are consecutive in octree order (the frontier holds no
+        // cell deeper than them), and the parent's order is its first child's origin's.
+        merged.clear();
+        for (const FrontierCell& f : frontier) {
+            if (f.cell.depth < deepest) {
+                merged.push_back(f);
+            } else if (merged.empty() || merged.back().cell != f.cell.parent()) {
+                merged.push_back({f.cell.parent(), CellState::Pending});
+            }
+        }
+        // Not fewer cells where each parent held one (the rest empty), but one level less: the
+        // loop ends.
+        assert(merged.size() <= frontier.size());
+        frontier.swap(merged);
+    }
+    return frontier;
 }
 
 namespace {

@@ -134,7 +134,18 @@ class Octree {
     std::vector<FrontierCell> settled_;
     OctreeCounts counts_;
     std::size_t feature_cells_ = 0;  // cells made by splits at or below max_depth
+    /// Root counts of the edges of the cells classified at edge_counts_depth_ (the level being
+    /// classified): neighbouring families share the edges of their common faces.
+    EdgeRootCounts edge_counts_;
+    int edge_counts_depth_ = -1;
 };
+
+/// `frontier` (in octree order) with its deepest cells merged into their parents, level by level,
+/// until it holds at most `max_cells` cells (or its cells are the root's children): a coarser
+/// mesh of an unfinished octree, a preview that costs about as much as its cells. A parent takes
+/// the place of its first child in the frontier and is pending (it was split, not classified as
+/// a leaf): the mesh builder meshes it from its corners without the guarantee.
+std::vector<FrontierCell> coarsened(std::vector<FrontierCell> frontier, std::size_t max_cells);
 
 /// Replaces settled cell `cell` (a leaf or an unresolved cell the mesh builder must split to match
 /// finer neighbours) by the leaves of its subtree: its children, classified like any cell (so the

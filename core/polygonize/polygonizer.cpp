@@ -107,15 +107,16 @@ PolygonizeResult Polygonizer::mesh(const WorkBudget& budget) {
     return cancelled;
 }
 
-std::optional<PolygonizeResult> Polygonizer::mesh_slice(const WorkBudget& budget) {
+std::optional<PolygonizeResult> Polygonizer::mesh_slice(const WorkBudget& budget,
+                                                        std::size_t max_cells) {
     if (!slicing_) {
         slicing_ = std::make_unique<Slicing>();
         slicing_->points_before = pool_.point_evaluations();
         slicing_->intervals_before = pool_.interval_evaluations();
         if (!octree_.found_region()) {
-            slicing_->mesher =
-                std::make_unique<FrontierMesher>(pool_, lattice_, octree_.settings(), values_,
-                                                 octree_.frontier(), settings_.adjacency);
+            slicing_->mesher = std::make_unique<FrontierMesher>(
+                pool_, lattice_, octree_.settings(), values_,
+                coarsened(octree_.frontier(), max_cells), settings_.adjacency);
         }
     }
     const auto start = std::chrono::steady_clock::now();

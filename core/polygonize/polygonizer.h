@@ -106,7 +106,11 @@ class Polygonizer {
     /// and returns it once made, the same as mesh() makes. A cancelled call drops the unfinished
     /// mesh. Precondition: the octree does not change between the calls (complete(), or no
     /// advance() or settle() in between).
-    std::optional<PolygonizeResult> mesh_slice(const WorkBudget& budget);
+    /// A mesh started with `max_cells` is of the frontier coarsened to at most that many cells
+    /// (octree.h: coarsened), a preview whose cost that bounds; the frontier as it stands
+    /// otherwise.
+    std::optional<PolygonizeResult> mesh_slice(const WorkBudget& budget,
+                                               std::size_t max_cells = ~std::size_t{0});
 
     const OctreeCounts& counts() const { return octree_.counts(); }
     /// Evaluations made so far, by every worker.

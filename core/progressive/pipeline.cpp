@@ -219,7 +219,7 @@ void Pipeline::advance_phase1(const WorkBudget& budget) {
 
 void Pipeline::continue_intermediate(const WorkBudget& budget) {
     // Classification waits meanwhile: the mesh is of the octree as it stood.
-    std::optional<PolygonizeResult> made = phase1_->mesh_slice(budget);
+    std::optional<PolygonizeResult> made = phase1_->mesh_slice(budget, settings_.max_preview_cells);
     if (!made) {
         if (budget.cancelled()) intermediate_ = false;
         return;

@@ -242,6 +242,39 @@ TEST(Pipeline, step_spaces_intermediate_meshes_by_their_interval) {
     }
 }
 
+// An intermediate mesh is of the frontier coarsened to max_preview_cells (its cost bounded
+// whatever the octree holds): shallower than the octree, its merged cells meshed unclassified
+// (grading and crack patching may split a few of them again); the final one is of the whole
+// frontier.
+TEST(Pipeline, step_makes_intermediate_meshes_of_the_coarsened_frontier) {
+    constexpr std::size_t kPreviewCells = 500;
+    auto counter = std::make_shared<test::EvaluationCounter>();
+    const auto field =
+        std::make_shared<test::CountingField>(test::field_of(kGyroid.expression), counter);
+    PipelineSettings settings = settings_for(kGyroid.box, 100000);
+    settings.min_intermediate_interval = 0;  // every doubling meshed
+    settings.max_preview_cells = kPreviewCells;
+    Pipeline pipeline(field, settings);
+    // Uncapped, this run's intermediate meshes have 4,000 to 6,000 cells at depth 5, as the final.
+    std::size_t intermediate = 0;
+    for (int step = 0; step < 100000; ++step) {
+        const std::size_t meshes = pipeline.status().phase1_meshes;
+        const PipelineStep s = pipeline.step(WorkBudget(300, counter->clock()));
+        if (meshes > 0 && pipeline.status().phase1_meshes > meshes && pipeline.status().resolving) {
+            const PolygonizeStats& stats = pipeline.phase1_stats();
+            EXPECT_LE(stats.cells, 2 * kPreviewCells) << "step " << step;
+            EXPECT_GT(stats.pending_cells, 0u);
+            EXPECT_LT(stats.depth, 5);
+            ++intermediate;
+        }
+        if (s.converged) break;
+    }
+    ASSERT_FALSE(pipeline.status().resolving);
+    EXPECT_GE(intermediate, 1u);
+    EXPECT_EQ(pipeline.phase1_stats().depth, 5);  // the final mesh: the whole frontier
+    EXPECT_GT(pipeline.phase1_stats().cells, 2 * kPreviewCells);
+}
+
 // Regions where the equation holds are no surface: said within the first steps (at once where the
 // first cells' enclosures are exactly zero; x = x needs a few levels), with an empty mesh.
 TEST(Pipeline, step_recognises_regions_where_the_equation_holds) {
