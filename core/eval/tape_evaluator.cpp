@@ -266,9 +266,12 @@ void TapeEvaluator::pop() {
 }
 
 void TapeEvaluator::prepare_batch_registers(const TapeProgram& program) {
+    // A scratch register's array depends on its number alone: the pointers are set once for the
+    // most registers a program asked for (the refiner evaluates a few points at a time, very
+    // often, with one program).
     const std::size_t count = register_count(program);
-    if (scratch_.size() < program.scratch_registers * kBatchBlock)
-        scratch_.resize(program.scratch_registers * kBatchBlock);
+    if (count <= read_.size()) return;
+    scratch_.resize(program.scratch_registers * kBatchBlock);
     read_.resize(count);
     write_.resize(count);
     for (std::size_t r = kFirstScratchRegister; r < count; ++r) {

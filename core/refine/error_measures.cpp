@@ -70,33 +70,35 @@ void largest_sample_distances(Evaluator& evaluator, std::span<const TriangleGeom
                               std::span<double> distances, std::span<double> midpoint_values) {
     assert(triangles.size() == distances.size());
     assert(midpoint_values.empty() || midpoint_values.size() == triangles.size());
-    // Two samples per triangle: the base midpoint and the centroid.
-    thread_local std::vector<double> x, y, z, f;
-    const std::size_t n = 2 * triangles.size();
-    x.resize(n);
-    y.resize(n);
-    z.resize(n);
-    for (std::size_t i = 0; i < triangles.size(); ++i) {
-        const TriangleGeometry& t = triangles[i];
-        const glm::dvec3 samples[2] = {0.5 * (t.a + t.b), (t.a + t.b + t.c) / 3.0};
-        for (std::size_t k = 0; k < 2; ++k) {
-            x[2 * i + k] = samples[k].x;
-            y[2 * i + k] = samples[k].y;
-            z[2 * i + k] = samples[k].z;
+    // The refiner asks for a few triangles at a time, very often: the samples of up to kChunk
+    // triangles go on the stack, one batched evaluation each (each value is the single point's).
+    constexpr std::size_t kChunk = 32;
+    for (std::size_t first = 0; first < triangles.size(); first += kChunk) {
+        const std::size_t count = std::min(kChunk, triangles.size() - first);
+        // Two samples per triangle: the base midpoint and the centroid.
+        double x[2 * kChunk], y[2 * kChunk], z[2 * kChunk], f[2 * kChunk];
+        for (std::size_t i = 0; i < count; ++i) {
+            const TriangleGeometry& t = triangles[first + i];
+            const glm::dvec3 samples[2] = {0.5 * (t.a + t.b), (t.a + t.b + t.c) / 3.0};
+            for (std::size_t k = 0; k < 2; ++k) {
+                x[2 * i + k] = samples[k].x;
+                y[2 * i + k] = samples[k].y;
+                z[2 * i + k] = samples[k].z;
+            }
         }
-    }
-    f.resize(n);
-    evaluator.values({x, y, z}, f);
-    for (std::size_t i = 0; i < triangles.size(); ++i) {
-        double distance = 0.0;
-        for (std::size_t k = 2 * i; k < 2 * i + 2; ++k) {
-            const double g = triangles[i].gradient_norm;
-            const double d =
-                g > 0.0 ? std::abs(f[k]) / g : first_order_distance(evaluator, {x[k], y[k], z[k]});
-            if (std::isfinite(d)) distance = std::max(distance, d);
+        const std::size_t n = 2 * count;
+        evaluator.values({{x, n}, {y, n}, {z, n}}, {f, n});
+        for (std::size_t i = 0; i < count; ++i) {
+            double distance = 0.0;
+            const double g = triangles[first + i].gradient_norm;
+            for (std::size_t k = 2 * i; k < 2 * i + 2; ++k) {
+                const double d = g > 0.0 ? std::abs(f[k]) / g
+                                         : first_order_distance(evaluator, {x[k], y[k], z[k]});
+                if (std::isfinite(d)) distance = std::max(distance, d);
+            }
+            distances[first + i] = distance;
+            if (!midpoint_values.empty()) midpoint_values[first + i] = f[2 * i];
         }
-        distances[i] = distance;
-        if (!midpoint_values.empty()) midpoint_values[i] = f[2 * i];
     }
 }
 

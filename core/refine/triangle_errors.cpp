@@ -199,8 +199,8 @@ void Refiner::Impl::ensure_errors(std::span<const std::uint32_t> tris) {
             if (triangles_[t].state != TriangleState::Split) leaves.push_back(t);
         ensure_candidates(leaves);
     }
-    geometries_.clear();
-    for (std::uint32_t t : stale_) geometries_.push_back(geometry(t));
+    geometries_.resize(stale_.size());
+    for (std::size_t i = 0; i < stale_.size(); ++i) geometries_[i] = geometry(stale_[i]);
     errors_.resize(stale_.size());
     midpoint_values_.resize(stale_.size());
     settings_.error_measure->errors_and_midpoint_values(*evaluator_, geometries_, errors_,
