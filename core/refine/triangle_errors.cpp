@@ -172,18 +172,20 @@ Refiner::Impl::AheadProjection* Refiner::Impl::projected_ahead(std::uint32_t t) 
     return nullptr;
 }
 
-TriangleGeometry Refiner::Impl::geometry(std::uint32_t t) const {
+TriangleGeometry Refiner::Impl::geometry(std::uint32_t t, bool with_midpoint) const {
     const Triangle& T = triangles_[t];
     double gradient_norm = 0.0;  // the mean over the corners, or 0 if one is unknown
     for (std::uint32_t v : T.v) {
         const double g = vertices_[v].gradient_norm;
         gradient_norm = g > 0.0 && gradient_norm >= 0.0 ? gradient_norm + g / 3.0 : -1.0;
     }
-    const glm::dvec3 midpoint = T.state == TriangleState::Split
-                                    ? vertices_[records_[T.split].vertex].position
-                                    : T.candidate;
-    return {position(t, T.base), position(t, T.base + 1), position(t, T.base + 2), midpoint,
-            std::max(gradient_norm, 0.0)};
+    TriangleGeometry geometry{position(t, T.base), position(t, T.base + 1), position(t, T.base + 2),
+                              glm::dvec3(0.0), std::max(gradient_norm, 0.0)};
+    if (with_midpoint)
+        geometry.projected_midpoint = T.state == TriangleState::Split
+                                          ? vertices_[records_[T.split].vertex].position
+                                          : T.candidate;
+    return geometry;
 }
 
 void Refiner::Impl::ensure_errors(std::span<const std::uint32_t> tris) {
@@ -193,14 +195,16 @@ void Refiner::Impl::ensure_errors(std::span<const std::uint32_t> tris) {
     if (stale_.empty()) return;
     // The base midpoint is projected here only for measures that read it; otherwise only when
     // the triangle is split.
-    if (settings_.error_measure->needs_projected_midpoint()) {
+    const bool with_midpoint = settings_.error_measure->needs_projected_midpoint();
+    if (with_midpoint) {
         std::vector<std::uint32_t> leaves;
         for (std::uint32_t t : stale_)
             if (triangles_[t].state != TriangleState::Split) leaves.push_back(t);
         ensure_candidates(leaves);
     }
     geometries_.resize(stale_.size());
-    for (std::size_t i = 0; i < stale_.size(); ++i) geometries_[i] = geometry(stale_[i]);
+    for (std::size_t i = 0; i < stale_.size(); ++i)
+        geometries_[i] = geometry(stale_[i], with_midpoint);
     errors_.resize(stale_.size());
     midpoint_values_.resize(stale_.size());
     settings_.error_measure->errors_and_midpoint_values(*evaluator_, geometries_, errors_,
