@@ -101,6 +101,13 @@ void TapeEvaluator::values(const PointBatch& points, std::span<double> out) {
     assert(points.y.size() == n && points.z.size() == n && out.size() == n);
     const TapeProgram& program = top();
     prepare_batch_registers(program);
+    if (n == kSmallBatch) {
+        read_[0] = points.x.data();
+        read_[1] = points.y.data();
+        read_[2] = points.z.data();
+        write_[kOutputRegister] = out.data();
+        return run_small_batch_steps(program.steps, read_.data(), write_.data());
+    }
     for (std::size_t start = 0; start < n; start += kBatchBlock) {
         const std::size_t count = std::min(kBatchBlock, n - start);
         read_[0] = points.x.data() + start;
