@@ -129,7 +129,10 @@ void Refiner::Impl::request_ahead() {
     std::array<std::uint32_t, 2 * kProjectedAhead> next;
     std::size_t count = 0;
     split_queue_->visit_in_order([&](std::uint32_t t) {
+        // Both lines of the slot: candidate_request reads the midpoint value kept in the second
+        // (perf: three quarters of candidate_request's time waited for that load).
         __builtin_prefetch(&triangles_[t]);
+        __builtin_prefetch(&triangles_[t].candidate_gradient_norm);
         next[count++] = t;
         return count == next.size();
     });
