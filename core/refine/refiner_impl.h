@@ -322,8 +322,9 @@ class Refiner::Impl {
     bool retry_candidate(const SplitPlan& plan, std::size_t i);
     void execute(const SplitPlan& plan);
     void bisect(std::uint32_t t, std::uint32_t partner);
-    std::uint32_t make_child(std::uint32_t record, std::array<std::uint32_t, 3> v,
-                             std::array<std::uint32_t, 3> nb, std::uint8_t base);
+    /// A new triangle slot, child of `record` with base edge `base` (its corners and neighbours
+    /// for the caller to set).
+    std::uint32_t make_child(std::uint32_t record, std::uint8_t base);
     void merge(std::uint32_t record);
     MeshStats stats_after_merge(const MeshStats& stats, std::uint32_t record);
     bool acceptable_split(const MeshStats& stats, const SplitPlan& plan) const;
