@@ -282,9 +282,10 @@ class Refiner::Impl {
     bool free_ahead(const AheadProjection& a) const;
     /// Sets t's candidate from the projection of its base midpoint.
     void set_candidate(std::uint32_t t, const Projection& p, const glm::dvec3& direction);
-    /// t as the error measure sees it; the projected midpoint only `with_midpoint` (the measure
-    /// reads it), else zero.
-    TriangleGeometry geometry(std::uint32_t t, bool with_midpoint) const;
+    /// out = t as the error measure sees it; the projected midpoint only `with_midpoint` (the
+    /// measure reads it), else zero. Written in place: a returned copy was written in 8-byte
+    /// stores and read back in 16-byte loads, which wait for them (a store-forwarding stall).
+    void geometry(std::uint32_t t, bool with_midpoint, TriangleGeometry& out) const;
     /// Brings the errors of `tris` to the current version (one batched evaluation). A split
     /// triangle's projected midpoint is the vertex its split created.
     void ensure_errors(std::span<const std::uint32_t> tris);

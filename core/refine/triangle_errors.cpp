@@ -175,20 +175,21 @@ Refiner::Impl::AheadProjection* Refiner::Impl::projected_ahead(std::uint32_t t) 
     return nullptr;
 }
 
-TriangleGeometry Refiner::Impl::geometry(std::uint32_t t, bool with_midpoint) const {
+void Refiner::Impl::geometry(std::uint32_t t, bool with_midpoint, TriangleGeometry& out) const {
     const Triangle& T = triangles_[t];
     double gradient_norm = 0.0;  // the mean over the corners, or 0 if one is unknown
     for (std::uint32_t v : T.v) {
         const double g = vertices_[v].gradient_norm;
         gradient_norm = g > 0.0 && gradient_norm >= 0.0 ? gradient_norm + g / 3.0 : -1.0;
     }
-    TriangleGeometry geometry{position(t, T.base), position(t, T.base + 1), position(t, T.base + 2),
-                              glm::dvec3(0.0), std::max(gradient_norm, 0.0)};
-    if (with_midpoint)
-        geometry.projected_midpoint = T.state == TriangleState::Split
-                                          ? vertices_[records_[T.split].vertex].position
-                                          : T.candidate;
-    return geometry;
+    out.a = position(t, T.base);
+    out.b = position(t, T.base + 1);
+    out.c = position(t, T.base + 2);
+    out.projected_midpoint = !with_midpoint ? glm::dvec3(0.0)
+                             : T.state == TriangleState::Split
+                                 ? vertices_[records_[T.split].vertex].position
+                                 : T.candidate;
+    out.gradient_norm = std::max(gradient_norm, 0.0);
 }
 
 void Refiner::Impl::ensure_errors(std::span<const std::uint32_t> tris) {
@@ -207,7 +208,7 @@ void Refiner::Impl::ensure_errors(std::span<const std::uint32_t> tris) {
     }
     geometries_.resize(stale_.size());
     for (std::size_t i = 0; i < stale_.size(); ++i)
-        geometries_[i] = geometry(stale_[i], with_midpoint);
+        geometry(stale_[i], with_midpoint, geometries_[i]);
     errors_.resize(stale_.size());
     midpoint_values_.resize(stale_.size());
     settings_.error_measure->errors_and_midpoint_values(*evaluator_, geometries_, errors_,
