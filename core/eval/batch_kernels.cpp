@@ -77,7 +77,8 @@ ISOMESH_LOOP immediate_b_loop(const double* __restrict a, double imm, double* __
 
 #undef ISOMESH_LOOP
 
-/// The loops of one step over n points (n a std::integral_constant for a single point).
+/// The loops of one step over n points (n a std::integral_constant for a single point or a small
+/// batch).
 template <class Count>
 struct StepLoops {
     const BatchStep& s;
@@ -120,6 +121,11 @@ ISOMESH_VECTOR_CLONES void run_batch_steps(std::span<const BatchStep> steps,
                                            std::size_t n) {
     assert(n <= kBatchBlock);
     run_steps(steps, read, write, n);
+}
+
+ISOMESH_VECTOR_CLONES void run_small_batch_steps(std::span<const BatchStep> steps,
+                                                 const double* const* read, double* const* write) {
+    run_steps(steps, read, write, std::integral_constant<std::size_t, kSmallBatch>{});
 }
 
 void run_point_steps(std::span<const BatchStep> steps, double* registers) {

@@ -46,6 +46,15 @@ struct BatchStep {
 void run_batch_steps(std::span<const BatchStep> steps, const double* const* read,
                      double* const* write, std::size_t n);
 
+/// The points of run_small_batch_steps.
+inline constexpr std::size_t kSmallBatch = 8;
+
+/// run_batch_steps over exactly kSmallBatch points, a count known at compile time: loops without
+/// the remainders of a general count (the refiner's error measure evaluates 8 points at a time,
+/// very often). The same values.
+void run_small_batch_steps(std::span<const BatchStep> steps, const double* const* read,
+                           double* const* write);
+
 /// run_batch_steps for a single point, with the same operations of op_math.h (bit-identical
 /// values): registers[r] is register r; registers 0-2 hold x, y and z.
 void run_point_steps(std::span<const BatchStep> steps, double* registers);

@@ -101,6 +101,13 @@ void TapeEvaluator::values(const PointBatch& points, std::span<double> out) {
     assert(points.y.size() == n && points.z.size() == n && out.size() == n);
     const TapeProgram& program = top();
     prepare_batch_registers(program);
+    if (n == kSmallBatch) {
+        read_[0] = points.x.data();
+        read_[1] = points.y.data();
+        read_[2] = points.z.data();
+        write_[kOutputRegister] = out.data();
+        return run_small_batch_steps(program.steps, read_.data(), write_.data());
+    }
     for (std::size_t start = 0; start < n; start += kBatchBlock) {
         const std::size_t count = std::min(kBatchBlock, n - start);
         read_[0] = points.x.data() + start;
@@ -266,9 +273,12 @@ void TapeEvaluator::pop() {
 }
 
 void TapeEvaluator::prepare_batch_registers(const TapeProgram& program) {
+    // A scratch register's array depends on its number alone: the pointers are set once for the
+    // most registers a program asked for (the refiner evaluates a few points at a time, very
+    // often, with one program).
     const std::size_t count = register_count(program);
-    if (scratch_.size() < program.scratch_registers * kBatchBlock)
-        scratch_.resize(program.scratch_registers * kBatchBlock);
+    if (count <= read_.size()) return;
+    scratch_.resize(program.scratch_registers * kBatchBlock);
     read_.resize(count);
     write_.resize(count);
     for (std::size_t r = kFirstScratchRegister; r < count; ++r) {

@@ -70,10 +70,9 @@ bool Refiner::Impl::folds(const SplitCorners& k, const glm::dvec3& m, const glm:
     const glm::dvec3 parent_normals = k.na + k.nb + k.nc;
     const bool parent_faces_out = glm::dot(parent, parent_normals) > 0.0;
     const bool parent_folded = clear_fold(parent, parent_normals);
-    const std::array<std::array<glm::dvec3, 2>, 2> halves{{{k.a, m}, {m, k.b}}};
-    const std::array<glm::dvec3, 2> half_normals{k.na + m_normal + k.nc, m_normal + k.nb + k.nc};
-    for (int h = 0; h < 2; ++h) {
-        const auto& [p, q] = halves[h];
+    // The half (p, q, c) of the triangle, with the sum of its corners' normals.
+    const auto half_folds = [&](const glm::dvec3& p, const glm::dvec3& q,
+                                const glm::dvec3& half_normals) {
         const glm::dvec3 child = glm::cross(q - p, k.c - p);
         const double longest = std::max(
             {glm::dot(q - p, q - p), glm::dot(k.c - q, k.c - q), glm::dot(p - k.c, p - k.c)});
@@ -82,10 +81,10 @@ bool Refiner::Impl::folds(const SplitCorners& k, const glm::dvec3& m, const glm:
         // On a coarse (simplified) mesh a child can keep its parent's side yet face the
         // surface's inside: a parent facing the way its corners' normals do (towards f > 0) gets
         // no child that does not, and no split makes a clear fold where there was none.
-        if (parent_faces_out && !(glm::dot(child, half_normals[h]) > 0.0)) return true;
-        if (!parent_folded && clear_fold(child, half_normals[h])) return true;
-    }
-    return false;
+        if (parent_faces_out && !(glm::dot(child, half_normals) > 0.0)) return true;
+        return !parent_folded && clear_fold(child, half_normals);
+    };
+    return half_folds(k.a, m, k.na + m_normal + k.nc) || half_folds(m, k.b, m_normal + k.nb + k.nc);
 }
 
 void Refiner::Impl::block(std::uint32_t t) {
@@ -200,13 +199,10 @@ void Refiner::Impl::execute(const SplitPlan& plan) {
     }
 }
 
-std::uint32_t Refiner::Impl::make_child(std::uint32_t record, std::array<std::uint32_t, 3> v,
-                                        std::array<std::uint32_t, 3> nb, std::uint8_t base) {
+std::uint32_t Refiner::Impl::make_child(std::uint32_t record, std::uint8_t base) {
     const std::uint32_t slot = triangles_.allocate();
     Triangle& C = triangles_[slot];
     C.id = next_triangle_id_++;
-    C.v = v;
-    C.nb = nb;
     C.base = base;
     C.parent = record;
     return slot;
@@ -245,16 +241,23 @@ void Refiner::Impl::bisect(std::uint32_t t, std::uint32_t n) {
     for (int side = 0; side < 2; ++side) {
         const std::uint32_t p = parents[side];
         if (p == kNone) continue;
-        const Triangle P = triangles_[p];
-        const int b = P.base;
-        const std::uint32_t a = P.v[b], bb = P.v[(b + 1) % 3], c = P.v[(b + 2) % 3];
-        const std::uint32_t first =
-            make_child(record, {a, m, c}, {kNone, kNone, P.nb[(b + 2) % 3]}, 2);
-        const std::uint32_t second =
-            make_child(record, {m, bb, c}, {kNone, P.nb[(b + 1) % 3], first}, 1);
+        // Copies: make_child may move the pool.
+        const int b = triangles_[p].base;
+        const std::array<std::uint32_t, 3> v = triangles_[p].v, nb = triangles_[p].nb;
+        const std::uint32_t a = v[b], bb = v[(b + 1) % 3], c = v[(b + 2) % 3];
+        // The corners and neighbours are written here rather than passed to make_child: arrays
+        // of three 32-bit words passed by value went through the stack, written as words and read
+        // back in wider loads, which wait for the writes (a store-forwarding stall: half of
+        // bisect's time in perf).
+        const std::uint32_t first = make_child(record, 2);
+        triangles_[first].v = {a, m, c};
+        triangles_[first].nb = {kNone, kNone, nb[(b + 2) % 3]};
+        const std::uint32_t second = make_child(record, 1);
+        triangles_[second].v = {m, bb, c};
+        triangles_[second].nb = {kNone, nb[(b + 1) % 3], first};
         triangles_[first].nb[1] = second;
-        replace_neighbour(P.nb[(b + 2) % 3], p, first);
-        replace_neighbour(P.nb[(b + 1) % 3], p, second);
+        replace_neighbour(nb[(b + 2) % 3], p, first);
+        replace_neighbour(nb[(b + 1) % 3], p, second);
         children[2 * side] = first;
         children[2 * side + 1] = second;
         Triangle& Pm = triangles_[p];

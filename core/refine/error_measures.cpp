@@ -66,16 +66,17 @@ void ErrorMeasure::errors_and_midpoint_values(Evaluator& evaluator,
               std::numeric_limits<double>::quiet_NaN());
 }
 
-void largest_sample_distances(Evaluator& evaluator, std::span<const TriangleGeometry> triangles,
-                              std::span<double> distances, std::span<double> midpoint_values) {
-    assert(triangles.size() == distances.size());
-    assert(midpoint_values.empty() || midpoint_values.size() == triangles.size());
+namespace {
+
+/// largest_sample_distances with x, y, z and f arrays of 2 * triangles.size() doubles for the
+/// samples and their values.
+[[gnu::always_inline]] inline void sample_distances(Evaluator& evaluator,
+                                                    std::span<const TriangleGeometry> triangles,
+                                                    std::span<double> distances,
+                                                    std::span<double> midpoint_values,
+                                                    double* __restrict x, double* __restrict y,
+                                                    double* __restrict z, double* __restrict f) {
     // Two samples per triangle: the base midpoint and the centroid.
-    thread_local std::vector<double> x, y, z, f;
-    const std::size_t n = 2 * triangles.size();
-    x.resize(n);
-    y.resize(n);
-    z.resize(n);
     for (std::size_t i = 0; i < triangles.size(); ++i) {
         const TriangleGeometry& t = triangles[i];
         const glm::dvec3 samples[2] = {0.5 * (t.a + t.b), (t.a + t.b + t.c) / 3.0};
@@ -85,12 +86,12 @@ void largest_sample_distances(Evaluator& evaluator, std::span<const TriangleGeom
             z[2 * i + k] = samples[k].z;
         }
     }
-    f.resize(n);
-    evaluator.values({x, y, z}, f);
+    const std::size_t n = 2 * triangles.size();
+    evaluator.values({{x, n}, {y, n}, {z, n}}, {f, n});
     for (std::size_t i = 0; i < triangles.size(); ++i) {
         double distance = 0.0;
+        const double g = triangles[i].gradient_norm;
         for (std::size_t k = 2 * i; k < 2 * i + 2; ++k) {
-            const double g = triangles[i].gradient_norm;
             const double d =
                 g > 0.0 ? std::abs(f[k]) / g : first_order_distance(evaluator, {x[k], y[k], z[k]});
             if (std::isfinite(d)) distance = std::max(distance, d);
@@ -98,6 +99,30 @@ void largest_sample_distances(Evaluator& evaluator, std::span<const TriangleGeom
         distances[i] = distance;
         if (!midpoint_values.empty()) midpoint_values[i] = f[2 * i];
     }
+}
+
+}  // namespace
+
+void largest_sample_distances(Evaluator& evaluator, std::span<const TriangleGeometry> triangles,
+                              std::span<double> distances, std::span<double> midpoint_values) {
+    assert(triangles.size() == distances.size());
+    assert(midpoint_values.empty() || midpoint_values.size() == triangles.size());
+    // The refiner asks for a few triangles at a time, very often: their samples go on the stack.
+    // More (a new mesh, a function change) go into vectors kept per thread, in one evaluation
+    // call all the same (a call is the unit of work cancellation waits for).
+    constexpr std::size_t kOnStack = 16;
+    const std::size_t n = 2 * triangles.size();
+    if (triangles.size() <= kOnStack) {
+        double x[2 * kOnStack], y[2 * kOnStack], z[2 * kOnStack], f[2 * kOnStack];
+        return sample_distances(evaluator, triangles, distances, midpoint_values, x, y, z, f);
+    }
+    thread_local std::vector<double> x, y, z, f;
+    x.resize(n);
+    y.resize(n);
+    z.resize(n);
+    f.resize(n);
+    sample_distances(evaluator, triangles, distances, midpoint_values, x.data(), y.data(), z.data(),
+                     f.data());
 }
 
 void DistanceError::triangle_errors(Evaluator& evaluator,

@@ -282,7 +282,10 @@ class Refiner::Impl {
     bool free_ahead(const AheadProjection& a) const;
     /// Sets t's candidate from the projection of its base midpoint.
     void set_candidate(std::uint32_t t, const Projection& p, const glm::dvec3& direction);
-    TriangleGeometry geometry(std::uint32_t t) const;
+    /// out = t as the error measure sees it; the projected midpoint only `with_midpoint` (the
+    /// measure reads it), else zero. Written in place: a returned copy was written in 8-byte
+    /// stores and read back in 16-byte loads, which wait for them (a store-forwarding stall).
+    void geometry(std::uint32_t t, bool with_midpoint, TriangleGeometry& out) const;
     /// Brings the errors of `tris` to the current version (one batched evaluation). A split
     /// triangle's projected midpoint is the vertex its split created.
     void ensure_errors(std::span<const std::uint32_t> tris);
@@ -301,9 +304,10 @@ class Refiner::Impl {
     bool prepare(const SplitPlan& plan);
     /// Counts t's split as refused and keeps it unsplit (the blocked queue).
     void refuse(std::uint32_t t);
-    /// A triangle about to be bisected: its base edge a-b, apex c, and their normals.
+    /// A triangle about to be bisected: its base edge a-b, apex c, and their normals (referring
+    /// to the vertices' or candidates' own: a check reads them once, copies would cost more).
     struct SplitCorners {
-        glm::dvec3 a, b, c, na, nb, nc;
+        const glm::dvec3 &a, &b, &c, &na, &nb, &nc;
     };
     SplitCorners split_corners(std::uint32_t t) const;
     /// Bisecting the base edge at m (normal m_normal) would flip a child against the triangle,
@@ -319,8 +323,9 @@ class Refiner::Impl {
     bool retry_candidate(const SplitPlan& plan, std::size_t i);
     void execute(const SplitPlan& plan);
     void bisect(std::uint32_t t, std::uint32_t partner);
-    std::uint32_t make_child(std::uint32_t record, std::array<std::uint32_t, 3> v,
-                             std::array<std::uint32_t, 3> nb, std::uint8_t base);
+    /// A new triangle slot, child of `record` with base edge `base` (its corners and neighbours
+    /// for the caller to set).
+    std::uint32_t make_child(std::uint32_t record, std::uint8_t base);
     void merge(std::uint32_t record);
     MeshStats stats_after_merge(const MeshStats& stats, std::uint32_t record);
     bool acceptable_split(const MeshStats& stats, const SplitPlan& plan) const;

@@ -166,9 +166,11 @@ class Projector {
     }
 
     bool succeed(const glm::dvec3& p, const glm::dvec3& gradient, ProjectionMethod method) {
+        // unit_or_zero(gradient), with the one length.
         const double norm = glm::length(gradient);
-        result_ = Projection{p, unit_or_zero(gradient), std::isfinite(norm) ? norm : 0.0, method,
-                             evaluations_};
+        const bool unit = norm > 0.0 && std::isfinite(norm);
+        result_ = Projection{p, unit ? gradient / norm : glm::dvec3(0.0),
+                             std::isfinite(norm) ? norm : 0.0, method, evaluations_};
         return true;
     }
 

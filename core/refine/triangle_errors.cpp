@@ -129,7 +129,10 @@ void Refiner::Impl::request_ahead() {
     std::array<std::uint32_t, 2 * kProjectedAhead> next;
     std::size_t count = 0;
     split_queue_->visit_in_order([&](std::uint32_t t) {
+        // Both lines of the slot: candidate_request reads the midpoint value kept in the second
+        // (perf: three quarters of candidate_request's time waited for that load).
         __builtin_prefetch(&triangles_[t]);
+        __builtin_prefetch(&triangles_[t].candidate_gradient_norm);
         next[count++] = t;
         return count == next.size();
     });
@@ -172,18 +175,21 @@ Refiner::Impl::AheadProjection* Refiner::Impl::projected_ahead(std::uint32_t t) 
     return nullptr;
 }
 
-TriangleGeometry Refiner::Impl::geometry(std::uint32_t t) const {
+void Refiner::Impl::geometry(std::uint32_t t, bool with_midpoint, TriangleGeometry& out) const {
     const Triangle& T = triangles_[t];
     double gradient_norm = 0.0;  // the mean over the corners, or 0 if one is unknown
     for (std::uint32_t v : T.v) {
         const double g = vertices_[v].gradient_norm;
         gradient_norm = g > 0.0 && gradient_norm >= 0.0 ? gradient_norm + g / 3.0 : -1.0;
     }
-    const glm::dvec3 midpoint = T.state == TriangleState::Split
-                                    ? vertices_[records_[T.split].vertex].position
-                                    : T.candidate;
-    return {position(t, T.base), position(t, T.base + 1), position(t, T.base + 2), midpoint,
-            std::max(gradient_norm, 0.0)};
+    out.a = position(t, T.base);
+    out.b = position(t, T.base + 1);
+    out.c = position(t, T.base + 2);
+    out.projected_midpoint = !with_midpoint ? glm::dvec3(0.0)
+                             : T.state == TriangleState::Split
+                                 ? vertices_[records_[T.split].vertex].position
+                                 : T.candidate;
+    out.gradient_norm = std::max(gradient_norm, 0.0);
 }
 
 void Refiner::Impl::ensure_errors(std::span<const std::uint32_t> tris) {
@@ -193,14 +199,16 @@ void Refiner::Impl::ensure_errors(std::span<const std::uint32_t> tris) {
     if (stale_.empty()) return;
     // The base midpoint is projected here only for measures that read it; otherwise only when
     // the triangle is split.
-    if (settings_.error_measure->needs_projected_midpoint()) {
+    const bool with_midpoint = settings_.error_measure->needs_projected_midpoint();
+    if (with_midpoint) {
         std::vector<std::uint32_t> leaves;
         for (std::uint32_t t : stale_)
             if (triangles_[t].state != TriangleState::Split) leaves.push_back(t);
         ensure_candidates(leaves);
     }
-    geometries_.clear();
-    for (std::uint32_t t : stale_) geometries_.push_back(geometry(t));
+    geometries_.resize(stale_.size());
+    for (std::size_t i = 0; i < stale_.size(); ++i)
+        geometry(stale_[i], with_midpoint, geometries_[i]);
     errors_.resize(stale_.size());
     midpoint_values_.resize(stale_.size());
     settings_.error_measure->errors_and_midpoint_values(*evaluator_, geometries_, errors_,

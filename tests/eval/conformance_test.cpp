@@ -9,6 +9,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "eval/batch_kernels.h"
 #include "eval/grid_field.h"
 #include "eval/tape_field.h"
 #include "test_support.h"
@@ -120,6 +121,28 @@ TEST_P(EvaluatorConformance, values_match_point_bitwise) {
             ASSERT_TRUE(same_value(out[i], e->value(points[i])))
                 << "at " << describe(points[i]) << " batch " << out[i] << " point "
                 << e->value(points[i]);
+        }
+    }
+}
+
+// The tape evaluator runs batches of exactly kSmallBatch points with loops of that count (the
+// refiner's error measure); the sizes beside it take the general loops.
+TEST_P(EvaluatorConformance, values_of_small_batches_match_point_bitwise) {
+    auto e = evaluator();
+    Rng rng(2);
+    for (std::size_t n : {kSmallBatch - 1, kSmallBatch, kSmallBatch + 1}) {
+        // The special points first (in the first batches), then random ones.
+        const std::vector<glm::dvec3> points = random_points(rng, static_cast<int>(40 * n));
+        for (std::size_t start = 0; start + n <= points.size(); start += n) {
+            std::vector<double> x, y, z, out(n, 0.0);
+            for (std::size_t i = start; i < start + n; ++i)
+                x.push_back(points[i].x), y.push_back(points[i].y), z.push_back(points[i].z);
+            e->values({x, y, z}, out);
+            for (std::size_t i = 0; i < n; ++i) {
+                ASSERT_TRUE(same_value(out[i], e->value(points[start + i])))
+                    << "at " << describe(points[start + i]) << " batch of " << n << ": " << out[i]
+                    << " point " << e->value(points[start + i]);
+            }
         }
     }
 }
