@@ -140,7 +140,9 @@ const std::vector<Option>& options() {
         integer_option("io-threads", "network threads", &ServerConfig::io_threads, 1, 64),
         string_option("web-root", "folder of the browser client served at / (empty: built-in page)",
                       &ServerConfig::web_root),
-        integer_option("threads", "refinement worker threads (0: one per core)",
+        integer_option("threads",
+                       "refinement worker threads (0: one per core); idle ones help the "
+                       "running sessions' phase 1",
                        &ServerConfig::worker_threads, 0, 256),
         integer_option("worker-nice",
                        "nice levels the refinement workers run below the network threads: with "
@@ -201,7 +203,8 @@ const std::vector<Option>& options() {
         real_option("default-max-error", "error bound of a session that names none (0: none)",
                     &ServerConfig::default_max_error, 0, 1e300),
         integer_option("eval-timeout-ms",
-                       "CPU time (of the session's own work, not wall clock) for which phase 1 of "
+                       "CPU time (of the session's own work and of the workers helping it, not "
+                       "wall clock) for which phase 1 of "
                        "a function version examines cells before keeping the mesh it has; a "
                        "single step running this long ends the session with eval_timeout",
                        &ServerConfig::eval_timeout_ms, 1, kU32),

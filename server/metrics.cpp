@@ -128,6 +128,9 @@ std::string Metrics::render() const {
             first_mesh_cache_mismatches);
     counter("sessions_expired", "Sessions expired (idle or without subscribers).",
             sessions_expired);
+    counter("help_items",
+            "Items of a session's phase-1 loops run by idle workers helping it (--threads).",
+            help_items);
     counter("splits", "Triangle bisections.", splits);
     counter("merges", "Merges (undone splits).", merges);
     counter("keyframes_sent", "Keyframes queued for sending.", keyframes_sent);
@@ -146,7 +149,8 @@ std::string Metrics::render() const {
             origins_refused);
     counter("http_evicted", "HTTP connections closed to make room for new ones.", http_evicted);
     counter("accept_errors", "Failed accepts (e.g. out of file descriptors).", accept_errors);
-    metric(out, "isomesh_session_cpu_seconds_total", "counter", "CPU time of session turns.",
+    metric(out, "isomesh_session_cpu_seconds_total", "counter",
+           "CPU time of session turns and of the workers helping them.",
            static_cast<double>(session_cpu_us.value()) / 1e6);
     header(out, "isomesh_sessions_refused_total", "counter",
            "New sessions refused: per_connection (too_many_sessions), sessions and memory "

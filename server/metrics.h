@@ -84,13 +84,15 @@ struct Metrics {
     Counter bytes_sent;
     Counter messages_received;
     Counter http_requests;
-    Counter sessions_restored;        ///< rebuilt from the session store
-    Counter store_errors;             ///< session store calls that failed
-    Counter http_bad_requests;        ///< malformed HTTP requests and WebSocket handshakes (400)
-    Counter origins_refused;          ///< WebSocket handshakes from an Origin not allowed (403)
-    Counter http_evicted;             ///< HTTP connections closed to make room (limit, EMFILE)
-    Counter accept_errors;            ///< failed accept() calls (e.g. out of file descriptors)
-    Counter session_cpu_us;           ///< CPU time of session turns, microseconds
+    Counter sessions_restored;  ///< rebuilt from the session store
+    Counter store_errors;       ///< session store calls that failed
+    Counter http_bad_requests;  ///< malformed HTTP requests and WebSocket handshakes (400)
+    Counter origins_refused;    ///< WebSocket handshakes from an Origin not allowed (403)
+    Counter http_evicted;       ///< HTTP connections closed to make room (limit, EMFILE)
+    Counter accept_errors;      ///< failed accept() calls (e.g. out of file descriptors)
+    Counter session_cpu_us;     ///< CPU time of session turns and their helpers, microseconds
+    /// Items of a session's parallel loop (phase 1) run by an idle worker helping it.
+    Counter help_items;
     Counter first_mesh_cache_hits;    ///< new sessions that sent a cached first mesh
     Counter first_mesh_cache_misses;  ///< new sessions that made their first mesh
     /// Cached first meshes that the session's own first step did not reproduce (then sent).

@@ -188,7 +188,10 @@ bool MeshSession::run_slice() {
             services_.watchdog.arm(std::max(left, Clock::duration::zero()), cancel_, cpu_spent_);
         more = turn();
     }
-    return within_budgets(thread_cpu_time() - cpu_start) && more;
+    // The workers that helped phase 1 worked for this session too.
+    const Clock::duration helped = helpers_.cpu() - helpers_charged_;
+    helpers_charged_ += helped;
+    return within_budgets(thread_cpu_time() - cpu_start + helped) && more;
 }
 
 bool MeshSession::within_budgets(Clock::duration turn_cpu) {
@@ -324,11 +327,14 @@ MeshSession::Start MeshSession::start_version(FunctionVersion version, Inbox& in
     return restart_needed ? Start::restarted : Start::started;
 }
 
-std::unique_ptr<Pipeline> MeshSession::make_pipeline(const FunctionVersion& version) const {
+std::unique_ptr<Pipeline> MeshSession::make_pipeline(const FunctionVersion& version) {
     PipelineSettings settings;
     settings.phase1.box = version.box;
     settings.phase1.min_depth = services_.settings.phase1_min_depth;
-    settings.phase1.threads = 1;  // sessions run in parallel on the pool; the output is the same
+    // Phase 1's loops run on this worker and on the pool's idle ones (worker_pool.h: a busy server
+    // gives each session one core); the mesh is the same whatever the number of helpers.
+    settings.phase1.threads = static_cast<int>(std::max(1u, helpers_.threads()));
+    settings.phase1.helpers = &helpers_;
     settings.refine.error_measure = version.error_measure;
     settings.refine.constraint = version.constraint;
     return std::make_unique<Pipeline>(version.field, std::move(settings));
@@ -489,12 +495,14 @@ PipelineStep MeshSession::step_pipeline() {
     const auto slice_us = std::chrono::duration_cast<std::chrono::microseconds>(slice).count();
     const WorkBudget budget(slice_us, WorkBudget::thread_cpu_clock(), &cancel_);
     PipelineStep step;
+    const Clock::duration helped_before = helpers_.cpu();
     {
         // The step stops at its budget; the watchdog only catches a runaway evaluation.
         auto guard = arm_eval_limit();
         step = pipeline_->step(budget);
     }
-    limit_phase1(std::chrono::microseconds(budget.elapsed()));
+    // Phase 1's CPU time: this worker's (the budget's clock) and its helpers'.
+    limit_phase1(std::chrono::microseconds(budget.elapsed()) + helpers_.cpu() - helped_before);
     return step;
 }
 

@@ -219,7 +219,7 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     bool end_subscriptions(protocol::Closed::Reason reason);
     Start start_version(FunctionVersion version, Inbox& inbox);
     Start restart(FunctionVersion& version, Inbox& inbox);
-    std::unique_ptr<Pipeline> make_pipeline(const FunctionVersion& version) const;
+    std::unique_ptr<Pipeline> make_pipeline(const FunctionVersion& version);
     /// The pipeline's first step (the first mesh's budget, under the evaluation limit).
     PipelineStep first_step(Pipeline& pipeline);
     /// A new session whose request's first mesh is cached: sends it at once (the pipeline's own
@@ -273,6 +273,9 @@ class MeshSession final : public Task, public std::enable_shared_from_this<MeshS
     const protocol::SessionId view_id_;
     const std::uint64_t serial_;
     SessionServices services_;
+    /// The pool's idle workers, for phase 1's loops; their CPU time is charged to the session.
+    ChargedHelpers helpers_{services_.pool};
+    Clock::duration helpers_charged_{};  // of helpers_.cpu(), what within_budgets counted
     EndHandler on_end_;
     std::atomic<bool> cancel_{false};     // stop the current phase 1 or step
     std::atomic<bool> timed_out_{false};  // raised by the watchdog with cancel_

@@ -26,7 +26,9 @@ void lower_priority(int levels) {
 }  // namespace
 
 WorkerPool::WorkerPool(unsigned threads, Metrics* metrics, ErrorHandler on_error, int nice)
-    : metrics_(metrics), on_error_(std::move(on_error)) {
+    : next_timer_(Clock::time_point::max().time_since_epoch().count()),
+      metrics_(metrics),
+      on_error_(std::move(on_error)) {
     assert(threads >= 1);
     if (metrics_) metrics_->worker_threads.set(threads);
     for (unsigned i = 0; i < threads; ++i) {
@@ -53,6 +55,7 @@ void WorkerPool::schedule_at(const std::shared_ptr<Task>& task, Clock::time_poin
     if (task->wake_at_) timers_.erase({*task->wake_at_, task});
     task->wake_at_ = when;
     timers_.emplace(when, task);
+    note_timers();
     wake_.notify_one();  // a worker waiting for a later timer waits for this one instead
 }
 
@@ -63,6 +66,7 @@ std::optional<Clock::time_point> WorkerPool::release_due(Clock::time_point now) 
         task->wake_at_.reset();
         schedule_locked(task, Lane::round_robin);
     }
+    note_timers();
     if (timers_.empty()) return std::nullopt;
     return timers_.begin()->first;
 }
@@ -98,9 +102,16 @@ std::deque<std::shared_ptr<Task>>& WorkerPool::queue_of(Lane lane) {
     return queue_;
 }
 
+void WorkerPool::note_timers() {
+    next_timer_ = (timers_.empty() ? Clock::time_point::max() : timers_.begin()->first)
+                      .time_since_epoch()
+                      .count();
+}
+
 void WorkerPool::enqueue(const std::shared_ptr<Task>& task) {
     task->state_ = Task::State::queued;
     queue_of(task->lane_).push_back(task);
+    ++queued_tasks_;
     if (metrics_) metrics_->run_queue.add(1);
     wake_.notify_one();
 }
@@ -128,6 +139,7 @@ std::shared_ptr<Task> WorkerPool::next_task(Lane& lane) {
     auto& queue = queue_of(lane);
     std::shared_ptr<Task> task = std::move(queue.front());
     queue.pop_front();
+    --queued_tasks_;
     return task;
 }
 
@@ -136,6 +148,8 @@ void WorkerPool::stop() {
         std::lock_guard lock(mutex_);
         if (stopping_ && threads_.empty()) return;
         stopping_ = true;
+        recall_all_ = true;
+        offers_.clear();
         for (auto* lane : {&urgent_, &new_sessions_, &queue_}) {
             if (metrics_) metrics_->run_queue.add(-static_cast<std::int64_t>(lane->size()));
             for (auto& task : *lane) task->state_ = Task::State::idle;
@@ -143,6 +157,8 @@ void WorkerPool::stop() {
         }
         for (const auto& [when, task] : timers_) task->wake_at_.reset();
         timers_.clear();
+        note_timers();
+        queued_tasks_ = 0;
     }
     wake_.notify_all();
     for (std::thread& thread : threads_) thread.join();
@@ -162,12 +178,13 @@ std::size_t WorkerPool::queued() const {
 void WorkerPool::work() {
     for (;;) {
         std::shared_ptr<Task> task;
+        std::optional<OfferEntry> help_offer;
         Lane lane = Lane::round_robin;
         {
             std::unique_lock lock(mutex_);
             for (;;) {
                 const std::optional<Clock::time_point> next = release_due(Clock::now());
-                if (stopping_ || !nothing_queued()) break;
+                if (stopping_ || !nothing_queued() || !offers_.empty()) break;
                 if (next) {
                     wake_.wait_until(lock, *next);
                 } else {
@@ -175,10 +192,19 @@ void WorkerPool::work() {
                 }
             }
             if (stopping_) return;
-            task = next_task(lane);
-            task->state_ = Task::State::running;
-            ++running_;
-            if (metrics_) metrics_->run_queue.add(-1), metrics_->busy_workers.add(1);
+            if (nothing_queued()) help_offer = take_offer();  // help: only when no task waits
+            if (help_offer) {
+                ++helping_;
+            } else {
+                task = next_task(lane);
+                task->state_ = Task::State::running;
+                ++running_;
+                if (metrics_) metrics_->run_queue.add(-1), metrics_->busy_workers.add(1);
+            }
+        }
+        if (help_offer) {
+            help(*help_offer);
+            continue;
         }
         bool wants_more = false;
         const Clock::duration cpu_start = thread_cpu_time();
@@ -189,6 +215,51 @@ void WorkerPool::work() {
         }
         finish_turn(task, wants_more, lane, thread_cpu_time() - cpu_start);
     }
+}
+
+void WorkerPool::offer(const std::shared_ptr<HelpOffer>& offer, unsigned threads) {
+    offer_charged(offer, threads, nullptr);
+}
+
+void WorkerPool::offer_charged(const std::shared_ptr<HelpOffer>& offer, unsigned threads,
+                               std::shared_ptr<std::atomic<Clock::rep>> cpu) {
+    if (threads == 0) return;
+    {
+        std::lock_guard lock(mutex_);
+        if (stopping_) return;
+        offers_.push_back({offer, threads, std::move(cpu)});
+    }
+    for (unsigned i = 0; i < threads; ++i) wake_.notify_one();
+}
+
+void WorkerPool::withdraw(const HelpOffer& offer) {
+    std::lock_guard lock(mutex_);
+    std::erase_if(offers_, [&](const OfferEntry& entry) { return entry.offer.get() == &offer; });
+}
+
+std::optional<WorkerPool::OfferEntry> WorkerPool::take_offer() {
+    if (offers_.empty()) return std::nullopt;
+    OfferEntry& first = offers_.front();
+    assert(first.threads > 0);
+    OfferEntry taken = first;
+    if (--first.threads == 0) offers_.pop_front();
+    return taken;
+}
+
+bool WorkerPool::wanted_back() const {
+    return queued_tasks_.load(std::memory_order_relaxed) > 0 ||
+           recall_all_.load(std::memory_order_relaxed) ||
+           Clock::now().time_since_epoch().count() >= next_timer_.load(std::memory_order_relaxed);
+}
+
+void WorkerPool::help(const OfferEntry& entry) {
+    const Clock::duration cpu_start = thread_cpu_time();
+    const std::size_t items = entry.offer->help([this] { return wanted_back(); });
+    if (entry.cpu) *entry.cpu += (thread_cpu_time() - cpu_start).count();
+    if (metrics_) metrics_->help_items.add(items);
+    std::lock_guard lock(mutex_);
+    --helping_;
+    if (idle()) idle_.notify_all();
 }
 
 void WorkerPool::finish_turn(const std::shared_ptr<Task>& task, bool wants_more, Lane lane,

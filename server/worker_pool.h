@@ -16,9 +16,16 @@
 //
 // A task may also ask for a turn at a later time (schedule_at): a session waiting for a dragged
 // slider to rest. Until then it costs nothing; its turn then goes to the round-robin lane.
+//
+// The pool is also an executor of help offers (work/helpers.h): a running task's parallel loop (a
+// session's phase 1) offers its items to the other workers, which take the offer only when no
+// task is queued in any lane and no timer is due, and go back to the tasks after the item they
+// run once one is (recall): help is the lowest priority, a busy server gives each session one
+// core as without it, and a queued task waits at most one help item longer.
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <exception>
@@ -33,6 +40,7 @@
 
 #include "server/clock.h"
 #include "server/metrics.h"
+#include "work/helpers.h"
 
 namespace isomesh::server {
 
@@ -53,7 +61,7 @@ class Task {
     std::optional<Clock::time_point> wake_at_;  // its entry in the pool's timers; same guard
 };
 
-class WorkerPool {
+class WorkerPool final : public Helpers {
   public:
     using ErrorHandler = std::function<void(std::exception_ptr)>;
 
@@ -64,7 +72,7 @@ class WorkerPool {
     /// moments, come first when the cores are full of refinement.
     explicit WorkerPool(unsigned threads, Metrics* metrics = nullptr, ErrorHandler on_error = {},
                         int nice = 0);
-    ~WorkerPool();
+    ~WorkerPool() override;
     WorkerPool(const WorkerPool&) = delete;
     WorkerPool& operator=(const WorkerPool&) = delete;
 
@@ -76,7 +84,16 @@ class WorkerPool {
     /// for this way before. Thread-safe; ignored after stop().
     void schedule_at(const std::shared_ptr<Task>& task, Clock::time_point when);
 
-    /// Waits until no task is queued, running or due later, or until `deadline`; true when idle.
+    /// Helpers: offers `offer` to up to `threads` workers, taken when idle (see above); ignored
+    /// after stop(). Thread-safe.
+    void offer(const std::shared_ptr<HelpOffer>& offer, unsigned threads) override;
+    void withdraw(const HelpOffer& offer) override;
+    /// As offer(), the CPU time the helpers spend on it added to `*cpu` (a session's account).
+    void offer_charged(const std::shared_ptr<HelpOffer>& offer, unsigned threads,
+                       std::shared_ptr<std::atomic<Clock::rep>> cpu);
+
+    /// Waits until no task is queued, running or due later and no worker helps, or until
+    /// `deadline`; true when idle.
     bool wait_idle(Clock::time_point deadline);
 
     /// Lets running turns finish, drops queued tasks and joins the threads. Idempotent.
@@ -87,6 +104,20 @@ class WorkerPool {
 
   private:
     void work();
+    /// An offer with the threads it may still have and the account its helpers' CPU time goes to.
+    struct OfferEntry {
+        std::shared_ptr<HelpOffer> offer;
+        unsigned threads;
+        std::shared_ptr<std::atomic<Clock::rep>> cpu;  // may be null
+    };
+    /// Runs help it took (the mutex not held), counting its items and charging its CPU time.
+    void help(const OfferEntry& entry);
+    /// A helper's recall: a task is queued, a timer is due or the pool is stopping.
+    bool wanted_back() const;
+    /// With the mutex held: the first offer, one thread fewer for it.
+    std::optional<OfferEntry> take_offer();
+    /// With the mutex held, after timers_ changed: keeps next_timer_ in step.
+    void note_timers();
     /// With the mutex held and a task queued; `lane` receives the lane it came from.
     std::shared_ptr<Task> next_task(Lane& lane);
     void enqueue(const std::shared_ptr<Task>& task);  // in the lane of task->lane_
@@ -102,12 +133,15 @@ class WorkerPool {
     bool nothing_queued() const {
         return urgent_.empty() && new_sessions_.empty() && queue_.empty();
     }
-    bool idle() const { return nothing_queued() && running_ == 0 && timers_.empty(); }
+    bool idle() const {
+        return nothing_queued() && running_ == 0 && helping_ == 0 && timers_.empty();
+    }
 
     mutable std::mutex mutex_;
     std::condition_variable wake_;
     std::condition_variable idle_;
     std::size_t running_ = 0;
+    std::size_t helping_ = 0;  // workers in help()
     std::deque<std::shared_ptr<Task>> urgent_;
     std::deque<std::shared_ptr<Task>> new_sessions_;
     /// The CPU time of the urgent and new-session lanes' turns (by Lane) since both had work: the
@@ -116,9 +150,34 @@ class WorkerPool {
     std::deque<std::shared_ptr<Task>> queue_;                               // the round-robin lane
     std::set<std::pair<Clock::time_point, std::shared_ptr<Task>>> timers_;  // schedule_at
     bool stopping_ = false;
+    /// Help offers with the threads they may still have, oldest first.
+    std::deque<OfferEntry> offers_;
+    // Read by helpers without the mutex (wanted_back); written with it.
+    std::atomic<std::size_t> queued_tasks_ = 0;  // in the three lanes
+    std::atomic<Clock::rep> next_timer_;         // the first of timers_ (the maximum if none)
+    std::atomic<bool> recall_all_ = false;       // stopping
     Metrics* metrics_;
     ErrorHandler on_error_;
     std::vector<std::thread> threads_;
+};
+
+/// A task's door to the pool's help (a session's phase 1: session.h): offers go to the pool, and
+/// the CPU time its helpers spend is counted for the task to charge to itself (cpu()).
+class ChargedHelpers final : public Helpers {
+  public:
+    explicit ChargedHelpers(WorkerPool& pool) : pool_(pool) {}
+    void offer(const std::shared_ptr<HelpOffer>& offer, unsigned threads) override {
+        pool_.offer_charged(offer, threads, cpu_);
+    }
+    void withdraw(const HelpOffer& offer) override { pool_.withdraw(offer); }
+    /// The CPU time the helpers spent so far (a helper adds its time once it leaves the offer).
+    Clock::duration cpu() const { return Clock::duration(cpu_->load()); }
+    unsigned threads() const { return pool_.thread_count(); }
+
+  private:
+    WorkerPool& pool_;
+    // Shared: a helper adds its time after help() returned, when the task may be gone.
+    std::shared_ptr<std::atomic<Clock::rep>> cpu_ = std::make_shared<std::atomic<Clock::rep>>(0);
 };
 
 }  // namespace isomesh::server

@@ -5,15 +5,20 @@
 #include <cassert>
 #include <exception>
 #include <mutex>
-#include <thread>
 
 namespace isomesh {
 
-EvaluatorPool::EvaluatorPool(const Field& field, int threads) {
+EvaluatorPool::EvaluatorPool(const Field& field, int threads, Helpers* helpers)
+    : field_(field), helpers_(helpers), evaluators_(static_cast<std::size_t>(threads)) {
     assert(threads >= 1);
-    for (int i = 0; i < threads; ++i) {
-        evaluators_.push_back(std::make_unique<CountingEvaluator>(field.make_evaluator()));
-    }
+    evaluator(0);
+}
+
+CountingEvaluator& EvaluatorPool::evaluator(unsigned slot) {
+    assert(slot < evaluators_.size());
+    auto& e = evaluators_[slot];
+    if (!e) e = std::make_unique<CountingEvaluator>(field_.make_evaluator());
+    return *e;
 }
 
 void EvaluatorPool::for_each(std::size_t count,
@@ -21,38 +26,44 @@ void EvaluatorPool::for_each(std::size_t count,
     std::atomic<std::size_t> next{0};
     std::exception_ptr error;
     std::mutex error_mutex;
-    auto work = [&](CountingEvaluator& evaluator) {
-        for (std::size_t i = next++; i < count; i = next++) {
+    const HelpWork work = [&](unsigned slot, const Recall& recalled) {
+        CountingEvaluator* e = nullptr;  // made at the first item: a helper may find none left
+        std::size_t items = 0;
+        while (!recalled()) {
+            const std::size_t i = next++;
+            if (i >= count) break;
             try {
-                task(i, evaluator);
+                if (e == nullptr) e = &evaluator(slot);
+                task(i, *e);
             } catch (...) {
                 const std::lock_guard lock(error_mutex);
                 if (!error) error = std::current_exception();
                 next = count;  // stop handing out work
             }
+            ++items;
         }
+        return items;
     };
     const std::size_t helpers =
         std::min<std::size_t>(evaluators_.size() - 1, count > 0 ? count - 1 : 0);
-    std::vector<std::jthread> threads;
-    threads.reserve(helpers);
-    for (std::size_t w = 1; w <= helpers; ++w) {
-        threads.emplace_back([&work, this, w] { work(*evaluators_[w]); });
-    }
-    work(*evaluators_[0]);
-    threads.clear();  // joins
+    run_helped(helpers_, static_cast<unsigned>(helpers), work);
     if (error) std::rethrow_exception(error);
+}
+
+std::size_t EvaluatorPool::evaluators_made() const {
+    return static_cast<std::size_t>(std::count_if(evaluators_.begin(), evaluators_.end(),
+                                                  [](const auto& e) { return e != nullptr; }));
 }
 
 std::size_t EvaluatorPool::point_evaluations() const {
     std::size_t total = 0;
-    for (const auto& e : evaluators_) total += e->point_evaluations();
+    for (const auto& e : evaluators_) total += e ? e->point_evaluations() : 0;
     return total;
 }
 
 std::size_t EvaluatorPool::interval_evaluations() const {
     std::size_t total = 0;
-    for (const auto& e : evaluators_) total += e->interval_evaluations();
+    for (const auto& e : evaluators_) total += e ? e->interval_evaluations() : 0;
     return total;
 }
 

@@ -346,15 +346,21 @@ void Octree::advance(EvaluatorPool& pool, ValueMap& values, const WorkBudget& bu
             counted[task] = std::move(classifier.edges());
         });
         // In octree order, whatever the workers' timing: the frontier does not depend on it.
-        std::vector<CellId> left;  // not classified: budget exhausted
+        // Only the cells classified in a row from the round's first are applied: a task cut
+        // short by the budget leaves the later tasks' cells pending even where a helper
+        // classified them (apply's feature_room counts cells in this order; taking them out of
+        // order made bear.vm's phase-1 mesh depend on the helpers' timing).
+        std::vector<CellId> left;  // not applied: budget exhausted
+        bool in_a_row = true;
         for (std::size_t task = 0; task < ranges.size(); ++task) {
             const auto [begin, end] = ranges[task];
-            for (std::size_t i = begin; i < begin + classified[task]; ++i) {
+            const std::size_t applied = in_a_row ? classified[task] : 0;
+            in_a_row = in_a_row && applied == end - begin;
+            for (std::size_t i = begin; i < begin + applied; ++i) {
                 pending_.classified();
                 apply(round[i], outcomes[i]);
             }
-            left.insert(left.end(),
-                        round.begin() + static_cast<std::ptrdiff_t>(begin + classified[task]),
+            left.insert(left.end(), round.begin() + static_cast<std::ptrdiff_t>(begin + applied),
                         round.begin() + static_cast<std::ptrdiff_t>(end));
             values.merge(evaluated[task]);
             edge_counts_.merge(counted[task]);

@@ -88,7 +88,7 @@ const std::shared_ptr<const Field>& non_null(const std::shared_ptr<const Field>&
 Polygonizer::Polygonizer(std::shared_ptr<const Field> field, const PolygonizeSettings& settings)
     : field_(non_null(field)),
       settings_(validated(settings)),
-      pool_(*field_, thread_count(settings.threads)),
+      pool_(*field_, thread_count(settings.threads), settings.helpers),
       lattice_(settings.box, kMaxOctreeDepth),
       octree_(lattice_, octree_settings(settings)) {}
 

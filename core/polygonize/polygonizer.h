@@ -38,8 +38,13 @@ struct PolygonizeSettings {
     int feature_levels = 3;
     /// The most octree cells kept (a memory bound; octree.h).
     std::size_t max_cells = 2'000'000;
-    /// Worker threads; 0 = one per hardware thread. The output does not depend on it.
+    /// Threads of its parallel loops (the caller's included); 0 = one per hardware thread. The
+    /// output does not depend on it.
     int threads = 0;
+    /// Where the loops find their threads besides the caller's (work/helpers.h): null starts
+    /// threads - 1 for each loop; an executor (a server's worker pool) lends up to threads - 1
+    /// of its idle ones. Must outlive the polygonization.
+    Helpers* helpers = nullptr;
     /// Fill in the mesh's neighbours and base edges (mesh.h). false leaves them empty for a
     /// caller that changes the mesh first and builds them after (mesh/build_adjacency): the
     /// pipeline simplifies a large phase-1 mesh to the budget, and on the blobby cube's 712,536

@@ -53,8 +53,8 @@ namespace isomesh {
 PolygonizeSettings refinement_phase1_settings();
 
 struct PipelineSettings {
-    /// The box, depths, threads and cell cap of phase 1 (its cancel flag is not read: the step
-    /// budget's is).
+    /// The box, depths, threads, helpers and cell cap of phase 1 (its cancel flag is not read: the
+    /// step budget's is).
     PolygonizeSettings phase1 = refinement_phase1_settings();
     /// The error measure, constraint (budget and error bound), queue and projection of the
     /// refiner (its cancel flag is not read: the step budget's is).

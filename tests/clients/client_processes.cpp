@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
@@ -96,8 +97,10 @@ ProgramRun run_program(const std::string& program, const std::vector<std::string
 }
 
 ServerProcess::ServerProcess(const std::vector<std::string>& extra_args) {
-    std::vector<std::string> args = {"--bind", "127.0.0.1",   "--port", "0",       "--threads",
-                                     "2",      "--log-level", "info",   "--store", "none"};
+    std::vector<std::string> args = {"--bind",      "127.0.0.1", "--port",  "0",
+                                     "--log-level", "info",      "--store", "none"};
+    if (std::find(extra_args.begin(), extra_args.end(), "--threads") == extra_args.end())
+        args.insert(args.end(), {"--threads", "2"});
     args.insert(args.end(), extra_args.begin(), extra_args.end());
     // The log goes to a file (a pipe nobody drains could fill up and block the server).
     const std::string log_path = scratch_path("server.log");

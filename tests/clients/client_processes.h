@@ -28,8 +28,8 @@ ProgramRun run_program(const std::string& program, const std::vector<std::string
 /// with SIGTERM (and SIGKILL if it does not drain in 10 s).
 class ServerProcess {
   public:
-    /// Starts the server with `extra_args` and waits (at most 20 s) for its "listening" log
-    /// line. Check ok() afterwards; log() tells what went wrong.
+    /// Starts the server with `extra_args` (two workers unless they give --threads) and waits (at
+    /// most 20 s) for its "listening" log line. Check ok() afterwards; log() tells what went wrong.
     explicit ServerProcess(const std::vector<std::string>& extra_args = {});
     ~ServerProcess();
     ServerProcess(const ServerProcess&) = delete;
