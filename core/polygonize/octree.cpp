@@ -318,6 +318,7 @@ Octree::Octree(const Lattice& lattice, const OctreeSettings& settings)
 void Octree::advance(EvaluatorPool& pool, ValueMap& values, const WorkBudget& budget,
                      std::size_t max_frontier) {
     std::vector<CellId> round;
+    std::vector<CellId> fresh;  // the round's cells not classified ahead before
     while (!pending_.empty() && !found_region() && !budget.exhausted()) {
         const std::size_t frontier = pending_.size() + settled_.size();
         if (frontier >= max_frontier) break;
@@ -326,48 +327,78 @@ void Octree::advance(EvaluatorPool& pool, ValueMap& values, const WorkBudget& bu
         const std::size_t room = std::min(kCellsPerRound, (max_frontier - frontier) / 7 + 1);
         round.clear();
         pending_.take_front(room, round);
-        const auto ranges = task_ranges(round);
-        std::vector<CellOutcome> outcomes(round.size());
-        std::vector<std::size_t> classified(ranges.size(), 0);
-        std::vector<ValueMap> evaluated(ranges.size());
-        std::vector<EdgeRootCounts> counted(ranges.size());
+        fresh.clear();
+        for (const CellId& cell : round) {
+            if (!ahead_.contains(level_order_key(cell))) fresh.push_back(cell);
+        }
         if (round.front().depth != edge_counts_depth_) {
             // Edges of cells at one depth are shared only with cells at that depth.
             edge_counts_.clear();
             edge_counts_depth_ = round.front().depth;
         }
-        pool.for_each(ranges.size(), [&](std::size_t task, CountingEvaluator& evaluator) {
-            const auto [begin, end] = ranges[task];
-            CellClassifier classifier(evaluator, lattice_, settings_, &values, &edge_counts_);
-            classified[task] =
-                classifier.classify(std::span(round).subspan(begin, end - begin),
-                                    std::span(outcomes).subspan(begin, end - begin), budget);
-            evaluated[task] = std::move(classifier.corners().values());
-            counted[task] = std::move(classifier.edges());
-        });
-        // In octree order, whatever the workers' timing: the frontier does not depend on it.
-        // Only the cells classified in a row from the round's first are applied: a task cut
-        // short by the budget leaves the later tasks' cells pending even where a helper
-        // classified them (apply's feature_room counts cells in this order; taking them out of
-        // order made bear.vm's phase-1 mesh depend on the helpers' timing).
-        std::vector<CellId> left;  // not applied: budget exhausted
-        bool in_a_row = true;
-        for (std::size_t task = 0; task < ranges.size(); ++task) {
-            const auto [begin, end] = ranges[task];
-            const std::size_t applied = in_a_row ? classified[task] : 0;
-            in_a_row = in_a_row && applied == end - begin;
-            for (std::size_t i = begin; i < begin + applied; ++i) {
-                pending_.classified();
-                apply(round[i], outcomes[i]);
-            }
-            left.insert(left.end(), round.begin() + static_cast<std::ptrdiff_t>(begin + applied),
-                        round.begin() + static_cast<std::ptrdiff_t>(end));
-            values.merge(evaluated[task]);
-            edge_counts_.merge(counted[task]);
-        }
-        pending_.return_front(left);
+        const std::vector<std::optional<CellOutcome>> outcomes =
+            classify_round(pool, values, fresh, budget);
+        apply_in_order(round, outcomes);
         counts_.pending = pending_.size();
     }
+}
+
+std::vector<std::optional<CellOutcome>> Octree::classify_round(EvaluatorPool& pool,
+                                                               ValueMap& values,
+                                                               std::span<const CellId> cells,
+                                                               const WorkBudget& budget) {
+    const auto ranges = task_ranges(cells);
+    std::vector<CellOutcome> outcomes(cells.size());
+    std::vector<std::size_t> classified(ranges.size(), 0);
+    std::vector<ValueMap> evaluated(ranges.size());
+    std::vector<EdgeRootCounts> counted(ranges.size());
+    pool.for_each(ranges.size(), [&](std::size_t task, CountingEvaluator& evaluator) {
+        const auto [begin, end] = ranges[task];
+        CellClassifier classifier(evaluator, lattice_, settings_, &values, &edge_counts_);
+        classified[task] =
+            classifier.classify(cells.subspan(begin, end - begin),
+                                std::span(outcomes).subspan(begin, end - begin), budget);
+        evaluated[task] = std::move(classifier.corners().values());
+        counted[task] = std::move(classifier.edges());
+    });
+    std::vector<std::optional<CellOutcome>> out(cells.size());
+    for (std::size_t task = 0; task < ranges.size(); ++task) {
+        const auto [begin, end] = ranges[task];
+        for (std::size_t i = begin; i < begin + classified[task]; ++i) out[i] = outcomes[i];
+        values.merge(evaluated[task]);
+        edge_counts_.merge(counted[task]);
+    }
+    return out;
+}
+
+void Octree::apply_in_order(std::span<const CellId> round,
+                            std::span<const std::optional<CellOutcome>> outcomes) {
+    // Applied in octree order, whatever the workers' timing, so that the frontier does not depend
+    // on it: apply's caps (feature_room, max_cells) count cells in this order. A budget may cut
+    // one task short while another worker classified cells after it: those wait in ahead_ for
+    // the cells before them (classifying them again would throw a helper's work away).
+    std::vector<CellId> left;  // not applied: budget exhausted
+    std::size_t next_fresh = 0;
+    for (const CellId& cell : round) {
+        const std::uint64_t key = level_order_key(cell);
+        std::optional<CellOutcome> outcome;
+        const auto known = ahead_.find(key);
+        if (known != ahead_.end()) {
+            outcome = known->second;
+        } else {
+            assert(next_fresh < outcomes.size());  // the cells not in ahead_, in order
+            outcome = outcomes[next_fresh++];
+        }
+        if (left.empty() && outcome) {
+            if (known != ahead_.end()) ahead_.erase(known);
+            pending_.classified();
+            apply(cell, *outcome);
+            continue;
+        }
+        if (outcome) ahead_.emplace(key, *outcome);
+        left.push_back(cell);
+    }
+    pending_.return_front(left);
 }
 
 void Octree::apply(const CellId& cell, CellOutcome outcome) {
@@ -419,6 +450,7 @@ void Octree::settle_pending() {
         ++counts_.unresolved;
     }
     pending_.clear();
+    ahead_.clear();
     counts_.pending = 0;
 }
 

@@ -16,6 +16,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -123,6 +124,17 @@ class Octree {
     const OctreeSettings& settings() const { return settings_; }
 
   private:
+    /// Classifies `cells` (one level, in octree order) in tasks on the pool's workers; an
+    /// outcome is empty where the budget stopped its task first. Adds the values and edge root
+    /// counts found to `values` and edge_counts_.
+    std::vector<std::optional<CellOutcome>> classify_round(EvaluatorPool& pool, ValueMap& values,
+                                                           std::span<const CellId> cells,
+                                                           const WorkBudget& budget);
+    /// Applies the outcomes of `round` (the cells taken, in order: those in ahead_ and the others,
+    /// whose outcomes are `outcomes`, in order) up to the first cell without one; the rest are
+    /// pending again, the outcomes known kept in ahead_.
+    void apply_in_order(std::span<const CellId> round,
+                        std::span<const std::optional<CellOutcome>> outcomes);
     void apply(const CellId& cell, CellOutcome outcome);
     /// Whether a cell to split may be: always above max_depth; below, while the search for small
     /// features has room left.
@@ -138,6 +150,9 @@ class Octree {
     /// classified): neighbouring families share the edges of their common faces.
     EdgeRootCounts edge_counts_;
     int edge_counts_depth_ = -1;
+    /// Outcomes of pending cells classified ahead of a cell a budget left unclassified (another
+    /// worker's task ran on), by level_order_key, applied once the cells before them are.
+    IdMap<CellOutcome> ahead_;
 };
 
 /// `frontier` (in octree order) with its deepest cells merged into their parents, level by level,

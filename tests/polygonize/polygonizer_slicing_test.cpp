@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <thread>
 
 #include "polygonize/polygonizer.h"
 #include "support/mesh_checks.h"
@@ -66,6 +67,44 @@ TEST(Polygonizer, advance_over_many_budgets_gives_the_octree_of_one_call) {
     test::expect_identical(sliced.mesh, whole.mesh);
     EXPECT_EQ(sliced.stats.cells, whole.stats.cells);
     EXPECT_EQ(sliced.stats.unresolved_cells, whole.stats.unresolved_cells);
+}
+
+// Where the octree's cell cap binds (apply() counts the cells in octree order), budgets that cut
+// one worker's task while the other classifies on still give the octree of one call: the cells
+// classified ahead wait for those before them.
+TEST(Polygonizer, advance_over_many_budgets_gives_the_octree_of_one_call_where_the_cap_binds) {
+    const auto field = test::field_of("x^4-5x^2+y^4-5y^2+z^4-5z^2+11.8=0");
+    PolygonizeSettings settings;
+    settings.box = {{-3.3, -3.3, -3.3}, {3.3, 3.3, 3.3}};
+    settings.min_depth = 3;
+    settings.max_depth = 6;
+    settings.max_cells = 3000;
+    settings.threads = 2;
+    Polygonizer whole(field, settings);
+    whole.advance(WorkBudget{});
+    ASSERT_GT(whole.counts().capped, 0u);  // the cap binds
+    const PolygonizeResult expected = whole.mesh(WorkBudget{});
+
+    Polygonizer polygonizer(field, settings);
+    // A clock that ticks at each look from the calling thread only (the other worker reads the
+    // start, and never runs out): the caller's task stops after a few families while the other
+    // worker's tasks run to their end, ahead of it.
+    auto ticks = std::make_shared<std::int64_t>(0);
+    const std::thread::id caller = std::this_thread::get_id();
+    const auto clock = [ticks, caller]() -> std::int64_t {
+        return std::this_thread::get_id() == caller ? (*ticks)++ : 0;
+    };
+    int calls = 0;
+    for (; !polygonizer.complete(); ++calls) {
+        polygonizer.advance(WorkBudget(5, clock));
+        ASSERT_LT(calls, 100000);
+    }
+    EXPECT_GT(calls, 3);
+    EXPECT_EQ(polygonizer.counts().capped, whole.counts().capped);
+    const PolygonizeResult sliced = polygonizer.mesh(WorkBudget{});
+    test::expect_identical(sliced.mesh, expected.mesh);
+    EXPECT_EQ(sliced.stats.cells, expected.stats.cells);
+    EXPECT_EQ(sliced.stats.unresolved_cells, expected.stats.unresolved_cells);
 }
 
 }  // namespace
