@@ -15,6 +15,11 @@
 
 namespace isomesh {
 
+/// Tasks of at most `per_task` items each for `items` items.
+inline std::size_t task_count(std::size_t items, std::size_t per_task) {
+    return (items + per_task - 1) / per_task;
+}
+
 class EvaluatorPool {
   public:
     /// Up to `threads` >= 1 threads a loop (the caller and threads - 1 helpers), on evaluators
