@@ -99,7 +99,7 @@ void find_roots(EvaluatorPool& workers, const Lattice& lattice, const ValueMap& 
                 CrossingRoots& crossings, std::size_t begin, std::size_t end,
                 const WorkBudget& budget) {
     workers.for_each(task_count(end - begin, kCrossingsPerTask), [&](std::size_t task,
-                                                                 CountingEvaluator& evaluator) {
+                                                                     CountingEvaluator& evaluator) {
         const std::size_t first = begin + task * kCrossingsPerTask;
         const std::size_t last = std::min(end, first + kCrossingsPerTask);
         AncestorPath path(evaluator, lattice);
