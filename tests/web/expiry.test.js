@@ -15,7 +15,9 @@ const viewer = viewerForTests('expiry', { serverArgs: ['--idle-timeout', String(
 test('a session the server ended (idle expiry) is said, and Enter draws the surface again', async () => {
   await page.goto(`${viewer.server.url}?eq=${encodeURIComponent('x^2+y^2+z^2=4')}`);
   const before = await waitForSnapshot(page, convergedOn, { expression: 'x^2+y^2+z^2=4' });
-  const ended = await waitForSnapshot(page, `(s) => s.surfaces[0].status === 'ended'`);
+  // The rows are redrawn at the next animation frame: the status may be in the snapshot a frame
+  // before the row's note.
+  const ended = await waitForSnapshot(page, `(s) => s.surfaces[0].status === 'ended' && s.surfaces[0].notes.length > 0`);
   const row = ended.surfaces[0];
   assert.equal(row.ended, 'expired');
   assert.equal(row.session, null);
